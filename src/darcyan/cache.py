@@ -1,0 +1,71 @@
+"""On-disk cache of per-shape work, keyed by the file's content and the parameters.
+
+Entries are ``.npz`` files named by a hash of (format version, content digest, parameter
+fingerprint, ...): renaming or moving a file keeps its entry, editing it does not. Writes go to a
+temporary file first and are renamed into place, so an interrupted run never leaves a broken
+entry.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+CACHE_FORMAT = "1"
+
+
+def default_cache_dir() -> Path:
+    """``$DARCYAN_CACHE``, else ``$XDG_CACHE_HOME/darcyan``, else ``~/.cache/darcyan``."""
+    if os.environ.get("DARCYAN_CACHE"):
+        return Path(os.environ["DARCYAN_CACHE"])
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "darcyan"
+
+
+def file_digest(path: str | os.PathLike) -> str:
+    """sha1 of a file's bytes (and, for TOSCA ``.vert``/``.tri``, of its sibling too)."""
+    from .mesh import _read_bytes  # the same clear errors as loading
+
+    path = Path(path)
+    h = hashlib.sha1()
+    paths = [path.with_suffix(".vert"), path.with_suffix(".tri")] if path.suffix.lower() in (".vert", ".tri") else [path]
+    for p in paths:
+        h.update(_read_bytes(p))
+    return h.hexdigest()
+
+
+class ShapeCache:
+    """A folder of cached per-shape results."""
+
+    def __init__(self, folder: str | os.PathLike | None = None):
+        self.folder = Path(folder) if folder is not None else default_cache_dir()
+
+    def key(self, *parts: str) -> str:
+        return hashlib.sha1("|".join((CACHE_FORMAT,) + parts).encode()).hexdigest()
+
+    def _path(self, key: str) -> Path:
+        return self.folder / f"{key}.npz"
+
+    def load(self, key: str) -> dict | None:
+        path = self._path(key)
+        if not path.exists():
+            return None
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                return {k: data[k] for k in data.files}
+        except Exception:  # a damaged entry is recomputed, never trusted
+            return None
+
+    def save(self, key: str, arrays: dict) -> None:
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=self.folder, suffix=".tmp.npz")
+            with os.fdopen(fd, "wb") as fh:
+                np.savez(fh, **arrays)
+            os.replace(tmp, self._path(key))
+        except OSError:
+            pass  # a cache that cannot be written only costs time

@@ -1,0 +1,180 @@
+"""The ``darcyan`` command line: a thin shell over the Python API.
+
+Every error the user can cause ends as one line ``darcyan: error: <input>: <problem>`` on stderr
+and exit status 2; warnings (components left out, polygons split) are one line each.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .cache import ShapeCache
+from .config import MATCHING_MODES, DarcyanConfig
+from .errors import DarcyanError
+from .mesh import MeshWarning
+
+EXIT_USAGE = 2
+
+
+def _add_config_options(parser: argparse.ArgumentParser) -> None:
+    defaults = DarcyanConfig()
+    group = parser.add_argument_group("method parameters (lengths in units of sqrt(surface area))")
+    group.add_argument("--levels", type=int, default=defaults.levels, help="n, geodesic level curves (default %(default)s)")
+    group.add_argument("--radial-lines", type=int, default=defaults.radial_lines, help="m, radial geodesic lines (default %(default)s)")
+    group.add_argument("--radius", type=float, default=defaults.radius, help="R, radius of the outer level curve (default %(default)s)")
+    group.add_argument("--interpolation", type=int, default=defaults.interpolation, help="samples per radial-line gap on each level curve (default %(default)s)")
+    group.add_argument("--curvature-smoothing", type=int, default=defaults.curvature_smoothing, help="one-ring smoothing iterations of the curvatures (default %(default)s)")
+    group.add_argument("--agd-sources", type=int, default=defaults.agd_sources, help="fast-marching sources approximating AGD (default %(default)s)")
+    group.add_argument("--extremity-radius", type=float, default=defaults.extremity_radius, help="AGD maxima are maxima within this geodesic radius (default %(default)s)")
+    group.add_argument("--max-features", type=int, default=defaults.max_features, help="at most this many feature points, 0 = all (default %(default)s)")
+    parser.add_argument("--repair", action="store_true", help="drop duplicate/degenerate faces and unreferenced vertices instead of refusing them")
+    parser.add_argument("--no-cache", action="store_true", help="do not read or write the per-shape cache ($DARCYAN_CACHE)")
+
+
+def _config(args: argparse.Namespace) -> DarcyanConfig:
+    extra = {"matching": args.matching} if getattr(args, "matching", None) else {}
+    return DarcyanConfig(levels=args.levels, radial_lines=args.radial_lines, radius=args.radius,
+                         interpolation=args.interpolation, curvature_smoothing=args.curvature_smoothing,
+                         agd_sources=args.agd_sources, extremity_radius=args.extremity_radius,
+                         max_features=args.max_features, **extra)
+
+
+def _cache(args: argparse.Namespace) -> ShapeCache | None:
+    return None if args.no_cache else ShapeCache()
+
+
+def _write_text(text: str, output: str | None) -> None:
+    if output is None or output == "-":
+        sys.stdout.write(text)
+        return
+    try:
+        Path(output).write_text(text)
+    except OSError as exc:
+        raise DarcyanError(f"{output}: cannot write ({exc.strerror or exc})") from None
+
+
+def cmd_match(args: argparse.Namespace) -> int:
+    from .pipeline import describe_shape, match_shapes
+
+    config = _config(args)
+    cache = _cache(args)
+    shape_1 = describe_shape(args.source, config, args.repair, cache)
+    shape_2 = describe_shape(args.target, config, args.repair, cache)
+    correspondence = match_shapes(shape_1, shape_2, config)
+    _write_text(correspondence.to_csv(), args.output)
+    return 0
+
+
+def cmd_features(args: argparse.Namespace) -> int:
+    from .pipeline import describe_shape
+
+    shape = describe_shape(args.mesh, _config(args), args.repair, _cache(args))
+    lines = ["vertex,agd"] + [f"{v},{a:.6g}" for v, a in zip(shape.feature_vertices, shape.feature_agd)]
+    _write_text("\n".join(lines) + "\n", args.output)
+    return 0
+
+
+def cmd_describe(args: argparse.Namespace) -> int:
+    from .pipeline import describe_shape
+
+    config = _config(args)
+    shape = describe_shape(args.mesh, config, args.repair, _cache(args))
+    out = Path(args.output)
+    if out.suffix.lower() == ".npz":
+        try:
+            np.savez(out, vertex=shape.feature_vertices, agd=shape.feature_agd, descriptor=shape.descriptors,
+                     config=np.array(str(config.as_dict())))
+        except OSError as exc:
+            raise DarcyanError(f"{out}: cannot write ({exc.strerror or exc})") from None
+    elif out.suffix.lower() == ".csv":
+        names = [f"k{k + 1}{kind}" for k in range(config.levels) for kind in ("max", "min")]
+        lines = [",".join(["vertex", "agd"] + names)]
+        for v, a, d in zip(shape.feature_vertices, shape.feature_agd, shape.descriptors):
+            lines.append(",".join([str(v), f"{a:.6g}"] + [f"{x:.6g}" for x in d]))
+        _write_text("\n".join(lines) + "\n", str(out))
+    else:
+        raise DarcyanError(f"{out}: output must end in .npz or .csv")
+    return 0
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    from .demo import run_demo
+
+    result = run_demo(progress=lambda msg: print(msg, file=sys.stderr))
+    print(result.report())
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="darcyan",
+        description="Correspondences between non-rigid 3D shapes with the Darcyan curvature descriptor "
+                    "(Sboui et al.).")
+    parser.add_argument("--version", action="version", version=f"darcyan {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+
+    p = sub.add_parser("match", help="match the feature points of two meshes",
+                       description="Match the extremities of SOURCE to those of TARGET. Writes CSV "
+                                   "source_vertex,target_vertex,distance (0-based vertex indices of the files).")
+    p.add_argument("source", help="mesh file (.off .obj .ply .vert/.tri)")
+    p.add_argument("target", help="mesh file (.off .obj .ply .vert/.tri)")
+    p.add_argument("-o", "--output", help="CSV file to write (default: stdout)")
+    p.add_argument("--matching", choices=MATCHING_MODES, default=DarcyanConfig().matching,
+                   help="nearest: the paper's nearest descriptor; one-to-one: optimal assignment (default %(default)s)")
+    _add_config_options(p)
+    p.set_defaults(func=cmd_match)
+
+    p = sub.add_parser("features", help="list the feature points (AGD maxima) of a mesh",
+                       description="Writes CSV vertex,agd: 0-based vertex index in the file, AGD in sqrt(area) units.")
+    p.add_argument("mesh")
+    p.add_argument("-o", "--output", help="CSV file to write (default: stdout)")
+    _add_config_options(p)
+    p.set_defaults(func=cmd_features)
+
+    p = sub.add_parser("describe", help="feature points and their Darcyan descriptors",
+                       description="Writes the feature points, their AGD and descriptors [k1max, k1min, ...] "
+                                   "to an .npz (arrays vertex, agd, descriptor) or .csv file.")
+    p.add_argument("mesh")
+    p.add_argument("-o", "--output", required=True, help="output file, .npz or .csv")
+    _add_config_options(p)
+    p.set_defaults(func=cmd_describe)
+
+    p = sub.add_parser("demo", help="run the whole method on a built-in synthetic figure in two poses",
+                       description="Matches a built-in articulated figure against a bent copy with known "
+                                   "ground truth and prints the matches and how many are correct.")
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+
+    def show_warning(message, category, filename, lineno, file=None, line=None):
+        print(f"darcyan: warning: {message}", file=sys.stderr)
+
+    warnings.showwarning = show_warning
+    warnings.simplefilter("ignore")  # library noise (numpy, trimesh) is not the user's business
+    warnings.simplefilter("always", MeshWarning)
+    try:
+        return args.func(args)
+    except DarcyanError as exc:
+        print(f"darcyan: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("darcyan: interrupted", file=sys.stderr)
+        return 130
+    except MemoryError:
+        print("darcyan: error: out of memory", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,93 @@
+"""All parameters of the method in one typed, documented object.
+
+Lengths are in units of ``sqrt(surface area)``: every mesh is scaled to total area 1 before
+analysis (the paper's scale normalization), so a radius of 0.1 means one tenth of the square
+root of the shape's area whatever the file's units. The defaults and how they were chosen are in
+``docs/parameters.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from dataclasses import dataclass
+
+from .errors import ConfigError
+
+MATCHING_MODES = ("nearest", "one-to-one")
+
+
+@dataclass(frozen=True)
+class DarcyanConfig:
+    """Parameters of feature extraction, the Darcyan grid, the descriptor and matching.
+
+    Attributes:
+        levels: n, the number of geodesic level curves of the grid (the descriptor has 2n values).
+        radial_lines: m, the number of radial geodesic lines, at equal angles 2*pi/m.
+        radius: R, geodesic radius of the outermost level curve; level k sits at R*k/n.
+        interpolation: the paper's interpolation step: each level curve is sampled at
+            ``radial_lines * interpolation`` points (geodesics traced between the m radial lines)
+            so the per-level mean sees more of the curve. 1 disables it.
+        curvature_smoothing: iterations of area-weighted one-ring averaging applied to the Meyer
+            principal curvatures before they are sampled (0 = raw Meyer operators).
+        agd_sources: number of farthest-point-sampled sources whose fast-marching distances are
+            averaged to approximate the Average Geodesic Distance (exact AGD would need V solves).
+        extremity_radius: a feature point is a vertex whose AGD is the largest within this
+            geodesic radius (greedy non-maximum suppression over one-ring maxima).
+        min_agd_quantile: one-ring maxima whose AGD is below this quantile of the AGD over the
+            vertices are discarded: extremities are far from everything, dents are not.
+        max_features: keep at most this many feature points (highest AGD first); 0 = no limit.
+        matching: ``"nearest"`` (the paper: each source point takes its nearest target
+            descriptor) or ``"one-to-one"`` (optimal assignment, each target used once).
+    """
+
+    levels: int = 6
+    radial_lines: int = 16
+    radius: float = 0.08
+    interpolation: int = 2
+    curvature_smoothing: int = 2
+    agd_sources: int = 24
+    extremity_radius: float = 0.15
+    min_agd_quantile: float = 0.5
+    max_features: int = 0
+    matching: str = "nearest"
+
+    def __post_init__(self) -> None:
+        positive_ints = ("levels", "radial_lines", "interpolation", "agd_sources")
+        for name in positive_ints:
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < 1:
+                raise ConfigError(f"config: {name} must be a positive integer, got {value!r}")
+        if self.radial_lines < 3:
+            raise ConfigError("config: radial_lines must be at least 3")
+        for name in ("curvature_smoothing", "max_features"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < 0:
+                raise ConfigError(f"config: {name} must be a non-negative integer, got {value!r}")
+        for name in ("radius", "extremity_radius"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and 0 < value < 10):
+                raise ConfigError(f"config: {name} must be a positive length (in sqrt(area)), got {value!r}")
+        if not 0 <= self.min_agd_quantile < 1:
+            raise ConfigError(f"config: min_agd_quantile must be in [0, 1), got {self.min_agd_quantile!r}")
+        if self.matching not in MATCHING_MODES:
+            raise ConfigError(f"config: matching must be one of {MATCHING_MODES}, got {self.matching!r}")
+
+    def replace(self, **changes) -> "DarcyanConfig":
+        """A copy with some fields changed (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+    def fingerprint(self, *fields: str) -> str:
+        """A short hash of the named fields (all when none named), for cache keys."""
+        values = self.as_dict()
+        chosen = {k: values[k] for k in (fields or values)}
+        return hashlib.sha1(json.dumps(chosen, sort_keys=True).encode()).hexdigest()[:16]
+
+    @property
+    def level_radii(self) -> "list[float]":
+        """lambda_1..lambda_n: the geodesic radii of the level curves."""
+        return [self.radius * (k + 1) / self.levels for k in range(self.levels)]

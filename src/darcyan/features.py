@@ -1,0 +1,114 @@
+"""Feature points at shape extremities: local maxima of the Average Geodesic Distance (AGD).
+
+AGD(v) is the mean geodesic distance from v to every point of the surface (Hilaga et al. 2001,
+Zhang et al. 2005); it is largest at the tips of limbs, head and tail. Computing it exactly needs
+one distance field per vertex, so it is approximated from a few sources spread by farthest-point
+sampling, each weighted by the area of its geodesic Voronoi cell: memory stays O(V x sources).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import DarcyanConfig
+from .curvature import mixed_voronoi_area
+from .geodesics import GeodesicSolver
+from .mesh import Mesh
+
+
+@dataclass(frozen=True)
+class AGD:
+    """``values (n,)``: approximate AGD per vertex (mesh units); ``sources (s,)``: the sample."""
+
+    values: np.ndarray
+    sources: np.ndarray
+
+
+@dataclass(frozen=True)
+class FeaturePoints:
+    """Extremities: ``vertices (k,) int64`` ordered by decreasing ``agd (k,)``."""
+
+    vertices: np.ndarray
+    agd: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.vertices)
+
+
+def farthest_point_sources(mesh: Mesh, solver: GeodesicSolver, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Farthest-point sampling by geodesic distance.
+
+    Starts at the vertex nearest the area-weighted centroid (so the sample does not depend on
+    vertex numbering or rigid motion) and adds, ``count`` times, the vertex farthest from all
+    sources so far. Returns the ``(count,)`` sources and their ``(count, n)`` distance fields.
+    """
+    areas = mesh.face_areas()
+    centroid = (mesh.vertices[mesh.faces].mean(axis=1) * areas[:, None]).sum(0) / areas.sum()
+    start = int(np.argmin(np.linalg.norm(mesh.vertices - centroid, axis=1)))
+    first = solver.distance(start)
+    sources, fields = [], []
+    nearest = first
+    current = int(np.argmax(first))  # the centroid itself is not a good source: start far from it
+    for _ in range(min(count, mesh.n_vertices)):
+        d = solver.distance(current)
+        sources.append(current)
+        fields.append(d)
+        nearest = d if len(sources) == 1 else np.minimum(nearest, d)
+        current = int(np.argmax(nearest))
+    return np.array(sources, dtype=np.int64), np.array(fields)
+
+
+def average_geodesic_distance(mesh: Mesh, solver: GeodesicSolver, sources: int) -> AGD:
+    """Approximate AGD from ``sources`` farthest-point samples weighted by their Voronoi areas."""
+    src, fields = farthest_point_sources(mesh, solver, sources)
+    owner = np.argmin(fields, axis=0)
+    cell_area = np.bincount(owner, weights=mixed_voronoi_area(mesh), minlength=len(src))
+    values = (cell_area[:, None] * fields).sum(axis=0) / cell_area.sum()
+    return AGD(values, src)
+
+
+def one_ring_maxima(mesh: Mesh, values: np.ndarray) -> np.ndarray:
+    """Vertices whose value is at least that of every neighbour."""
+    e = mesh.edges()
+    neighbour_max = np.full(mesh.n_vertices, -np.inf)
+    np.maximum.at(neighbour_max, e[:, 0], values[e[:, 1]])
+    np.maximum.at(neighbour_max, e[:, 1], values[e[:, 0]])
+    return np.flatnonzero(values >= neighbour_max)
+
+
+def extremities(mesh: Mesh, solver: GeodesicSolver, agd: AGD, config: DarcyanConfig,
+                distance_cache: dict | None = None) -> FeaturePoints:
+    """Local maxima of AGD over a geodesic ball of radius ``config.extremity_radius``.
+
+    Candidates are one-ring maxima above the ``min_agd_quantile`` of AGD, visited by decreasing
+    AGD; one is kept when no kept point lies within the radius and no vertex within the radius
+    has a larger AGD (checked on its own fast-marching field, which ``distance_cache`` keeps for
+    the grid built around it next).
+    """
+    values = agd.values
+    floor = np.quantile(values, config.min_agd_quantile)
+    candidates = one_ring_maxima(mesh, values)
+    candidates = candidates[values[candidates] >= floor]
+    candidates = candidates[np.argsort(-values[candidates], kind="stable")]
+    radius = config.extremity_radius
+    kept: list[int] = []
+    near_kept = np.zeros(mesh.n_vertices, bool)
+    cache = distance_cache if distance_cache is not None else {}
+    for v in candidates:
+        if near_kept[v]:
+            continue
+        d = cache.get(int(v))
+        if d is None:
+            d = solver.distance(int(v))
+        ball = d <= radius
+        if values[ball].max() > values[v] * (1 + 1e-9):
+            continue  # a higher point within the radius: v sits on the slope of another extremity
+        cache[int(v)] = d
+        kept.append(int(v))
+        near_kept |= ball
+        if config.max_features and len(kept) >= config.max_features:
+            break
+    kept_arr = np.array(kept, dtype=np.int64)
+    return FeaturePoints(kept_arr, values[kept_arr])

@@ -1,0 +1,173 @@
+"""The Darcyan coordinate system around a surface point (the paper's section 2.1).
+
+n geodesic level curves ``U = lambda_k`` of the fast-marching distance U from the centre are
+superposed with m radial geodesic lines leaving the centre at equal angles. Their intersections
+are ordered points: row k is level curve k, column l is radial line l, counter-clockwise about
+the outward normal starting from a reference direction.
+
+Radial lines are traced as straightest geodesics (geometry-central's tracer), which in the
+smooth setting are the integral curves of the paper's eq. 2; a radial line meets level curve k
+where the fast-marching U interpolated along it first reaches lambda_k. The paper's interpolation
+step, raising the grid's resolution, traces ``interpolation - 1`` extra radial lines between
+consecutive ones: ``DarcyanGrid.fine`` holds all of them, ``DarcyanGrid`` indexing the m main ones.
+
+A radial line that reaches the mesh boundary before a level leaves that intersection missing
+(``valid`` False, coordinates NaN): nothing is invented beyond the surface.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import DarcyanConfig
+from .geodesics import GeodesicSolver, interpolate, vertex_gradient, vertex_normals
+from .mesh import Mesh
+
+# Radial geodesics are traced this much beyond R: fast marching overestimates distance slightly,
+# so U reaches R a little later along the line than arc length does.
+TRACE_MARGIN = 1.5
+
+
+@dataclass(frozen=True)
+class DarcyanGrid:
+    """The intersection points of one Darcyan coordinate system, at full (interpolated) resolution.
+
+    Attributes:
+        centre: the vertex the system is built around.
+        radii: ``(n,)`` lambda_1..lambda_n (mesh units).
+        angles: ``(m * q,)`` angles of the radial lines (radians, counter-clockwise about the
+            outward normal from ``reference``); q = the interpolation factor.
+        points: ``(n, m * q, 3)`` positions (NaN where missing).
+        faces: ``(n, m * q)`` face of each point (-1 where missing).
+        barycentric: ``(n, m * q, 3)`` barycentric coordinates in that face.
+        valid: ``(n, m * q)`` bool, False where the radial line left the surface first.
+        reference: ``(3,)`` unit tangent direction of angle 0.
+        interpolation: q.
+        radial_paths: the ``m * q`` traced radial lines, each a ``(k, 3)`` polyline.
+    """
+
+    centre: int
+    radii: np.ndarray
+    angles: np.ndarray
+    points: np.ndarray
+    faces: np.ndarray
+    barycentric: np.ndarray
+    valid: np.ndarray
+    reference: np.ndarray
+    interpolation: int
+    radial_paths: tuple
+
+    @property
+    def main(self) -> slice:
+        """Column slice of the m radial lines before interpolation."""
+        return slice(None, None, self.interpolation)
+
+    def sample(self, mesh: Mesh, values: np.ndarray) -> np.ndarray:
+        """Per-vertex ``values (n_vertices,)`` at every grid point: ``(n, m * q)``, NaN where missing."""
+        out = np.full(self.valid.shape, np.nan)
+        ok = self.valid
+        out[ok] = interpolate(mesh, values, self.faces[ok], self.barycentric[ok])
+        return out
+
+
+def reference_direction(mesh: Mesh, vertex: int, toward_field: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Unit tangent direction at ``vertex`` along which ``toward_field`` (a distance field)
+    decreases fastest: the start of the geodesic toward that field's source."""
+    g = -vertex_gradient(mesh, toward_field, vertex)
+    g = g - normal * np.dot(g, normal)
+    if np.linalg.norm(g) < 1e-12:  # at the source itself: any tangent direction will do
+        g = np.cross(normal, [1.0, 0.0, 0.0])
+        if np.linalg.norm(g) < 1e-6:
+            g = np.cross(normal, [0.0, 1.0, 0.0])
+    return g / np.linalg.norm(g)
+
+
+def darcyan_grids(mesh: Mesh, solver: GeodesicSolver, vertices, config: DarcyanConfig,
+                  distances: dict | None = None, toward: np.ndarray | None = None) -> list[DarcyanGrid]:
+    """Darcyan coordinate systems around several vertices.
+
+    Args:
+        mesh: the (normalized) mesh; radii in ``config`` are in its length unit.
+        solver: the mesh's geodesic solver.
+        vertices: centre vertices.
+        config: levels n, radial_lines m, radius R, interpolation q.
+        distances: optional cache ``{vertex: (n_vertices,) fast-marching distance}``, filled in.
+        toward: ``(n_vertices,)`` distance field whose source fixes angle 0 at every centre (the
+            pipeline uses the shape's centre, the vertex of least AGD); by default each grid looks
+            toward the vertex farthest from its centre.
+
+    Returns:
+        One :class:`DarcyanGrid` per vertex.
+    """
+    distances = {} if distances is None else distances
+    normals = vertex_normals(mesh)
+    radii = np.asarray(config.level_radii)
+    q = config.interpolation
+    angles = 2 * np.pi * np.arange(config.radial_lines * q) / (config.radial_lines * q)
+    paths_all, owners = [], []
+    references = []
+    for i, v in enumerate(vertices):
+        v = int(v)
+        if v not in distances:
+            distances[v] = solver.distance(v)
+        field = toward if toward is not None else solver.distance(int(np.argmax(distances[v])))
+        n = normals[v]
+        ref = reference_direction(mesh, v, field, n)
+        side = np.cross(n, ref)
+        references.append(ref)
+        for a in angles:
+            path = solver.trace(v, np.cos(a) * ref + np.sin(a) * side, TRACE_MARGIN * radii[-1])
+            paths_all.append(path)
+            owners.append(i)
+    # Locate every traced point at once, read U there, and cut each line at the level radii.
+    lengths = [len(p) for p in paths_all]
+    stacked = np.concatenate(paths_all) if paths_all else np.zeros((0, 3))
+    faces, bary = solver.locate(stacked)
+    offsets = np.concatenate([[0], np.cumsum(lengths)])
+    crossing_points = []  # per path: (n, 3) positions, NaN where missing
+    for p, (path, owner) in enumerate(zip(paths_all, owners)):
+        sl = slice(offsets[p], offsets[p + 1])
+        u = interpolate(mesh, distances[int(vertices[owner])], faces[sl], bary[sl])
+        u[0] = 0.0
+        crossing_points.append(_level_crossings(path, u, radii))
+    crossing = np.array(crossing_points).reshape(len(vertices), len(angles), len(radii), 3) if paths_all else \
+        np.zeros((0, len(angles), len(radii), 3))
+    valid = np.isfinite(crossing[..., 0])
+    f_all = np.full(valid.shape, -1, dtype=np.int64)
+    b_all = np.full(valid.shape + (3,), np.nan)
+    if valid.any():
+        f_ok, b_ok = solver.locate(crossing[valid])
+        f_all[valid], b_all[valid] = f_ok, b_ok
+    grids = []
+    m_total = len(angles)
+    for i, v in enumerate(vertices):
+        grids.append(DarcyanGrid(
+            centre=int(v), radii=radii, angles=angles,
+            points=crossing[i].transpose(1, 0, 2), faces=f_all[i].T, barycentric=b_all[i].transpose(1, 0, 2),
+            valid=valid[i].T, reference=references[i], interpolation=q,
+            radial_paths=tuple(paths_all[i * m_total:(i + 1) * m_total])))
+    return grids
+
+
+def darcyan_grid(mesh: Mesh, solver: GeodesicSolver, vertex: int, config: DarcyanConfig,
+                 distance: np.ndarray | None = None, toward: np.ndarray | None = None) -> DarcyanGrid:
+    """The Darcyan coordinate system around one vertex (see :func:`darcyan_grids`)."""
+    cache = {int(vertex): distance} if distance is not None else None
+    return darcyan_grids(mesh, solver, [vertex], config, cache, toward)[0]
+
+
+def _level_crossings(path: np.ndarray, u: np.ndarray, radii: np.ndarray) -> np.ndarray:
+    """``(n, 3)``: where ``u`` along the polyline first reaches each radius (NaN if never)."""
+    out = np.full((len(radii), 3), np.nan)
+    if len(path) < 2:
+        return out
+    running = np.maximum.accumulate(u)  # first crossing of each level even if U wobbles
+    idx = np.searchsorted(running, radii, side="left")
+    ok = (idx > 0) & (idx < len(u))
+    j = idx[ok]
+    u0, u1 = running[j - 1], running[j]
+    t = np.where(u1 > u0, (radii[ok] - u0) / np.where(u1 > u0, u1 - u0, 1.0), 0.0)
+    out[ok] = path[j - 1] + t[:, None] * (path[j] - path[j - 1])
+    return out

@@ -1,0 +1,187 @@
+"""The method end to end: describe a shape, match two shapes.
+
+:func:`describe_shape` runs, for one mesh: preparation (checks, optional repair, largest
+component), scale normalization to area 1, Meyer curvatures, AGD, extremities, a Darcyan grid
+around each and its curvature descriptor. :func:`match_shapes` matches two descriptions.
+Feature vertices are always reported in the numbering of the input file.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .cache import ShapeCache, file_digest
+from .config import DarcyanConfig
+from .curvature import Curvatures, principal_curvatures
+from .descriptors import curvature_descriptors
+from .errors import MeshError
+from .features import AGD, FeaturePoints, average_geodesic_distance, extremities
+from .geodesics import GeodesicSolver
+from .grid import DarcyanGrid, darcyan_grids
+from .matching import Matches, match_descriptors
+from .mesh import Mesh, Normalization, load_mesh, normalize_mesh, prepare_mesh
+
+
+@dataclass
+class ShapeDescription:
+    """Feature points of one shape and their descriptors.
+
+    Attributes:
+        name: the file (or mesh name) described.
+        n_input_vertices: vertex count of the input, for range checks of results.
+        feature_vertices: ``(k,) int64`` feature points as 0-based vertex indices of the input file.
+        feature_agd: ``(k,)`` their AGD, in units of sqrt(area).
+        descriptors: ``(k, 2n)`` ``[k1max, k1min, ...]`` per feature point, 1/sqrt(area) units.
+        changes: repairs applied to the input (empty without ``repair``).
+        timings: seconds per stage.
+        mesh, normalization, curvatures, agd, features, grids, solver: the intermediate results
+            on the prepared, normalized mesh (``None`` when the description came from the cache).
+    """
+
+    name: str
+    n_input_vertices: int
+    feature_vertices: np.ndarray
+    feature_agd: np.ndarray
+    descriptors: np.ndarray
+    changes: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+    mesh: Mesh | None = None
+    normalization: Normalization | None = None
+    curvatures: Curvatures | None = None
+    agd: AGD | None = None
+    features: FeaturePoints | None = None
+    grids: list | None = None
+    solver: GeodesicSolver | None = None
+
+    def __len__(self) -> int:
+        return len(self.feature_vertices)
+
+    def arrays(self) -> dict:
+        """The cacheable part, as arrays."""
+        return {"feature_vertices": self.feature_vertices, "feature_agd": self.feature_agd,
+                "descriptors": self.descriptors, "n_input_vertices": np.array(self.n_input_vertices),
+                "changes": np.array(self.changes, dtype=str)}
+
+
+@dataclass(frozen=True)
+class Correspondence:
+    """Matches from shape 1 to shape 2: for each matched feature point of shape 1, one of shape 2.
+
+    ``source_vertex (k,)`` and ``target_vertex (k,)`` are 0-based vertex indices of the input
+    files; ``distance (k,)`` the descriptor L2 distances; ``matches_12`` the same as indices into
+    the two feature sets.
+    """
+
+    source_vertex: np.ndarray
+    target_vertex: np.ndarray
+    distance: np.ndarray
+    matches_12: Matches
+
+    def __len__(self) -> int:
+        return len(self.source_vertex)
+
+    def to_csv(self) -> str:
+        lines = ["source_vertex,target_vertex,distance"]
+        lines += [f"{s},{t},{d:.6g}" for s, t, d in zip(self.source_vertex, self.target_vertex, self.distance)]
+        return "\n".join(lines) + "\n"
+
+
+def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
+                 progress=None) -> ShapeDescription:
+    """Describe an in-memory mesh (see the module docstring); keeps every intermediate result."""
+    timings = {}
+    say = progress or (lambda stage: None)
+
+    def stage(name):
+        timings[name] = time.perf_counter()
+        say(name)
+
+    def done(name):
+        timings[name] = time.perf_counter() - timings[name]
+
+    n_input = mesh.n_vertices
+    stage("prepare")
+    prepared, changes = prepare_mesh(mesh, repair=repair)
+    normalized, normalization = normalize_mesh(prepared)
+    edges = normalized.edges()
+    mean_edge = float(np.linalg.norm(normalized.vertices[edges[:, 0]] - normalized.vertices[edges[:, 1]], axis=1).mean())
+    if mean_edge > config.radius:
+        raise MeshError(mesh.name, f"mesh too small or coarse for a Darcyan grid of radius {config.radius}: "
+                                   f"its mean edge is {mean_edge:.3g} (lengths in sqrt(area) units; "
+                                   f"{normalized.n_vertices} vertices)")
+    solver = GeodesicSolver(normalized)
+    done("prepare")
+    stage("curvature")
+    curvatures = principal_curvatures(normalized, smoothing=config.curvature_smoothing)
+    done("curvature")
+    stage("agd")
+    agd = average_geodesic_distance(normalized, solver, config.agd_sources)
+    done("agd")
+    stage("features")
+    distances: dict = {}
+    features = extremities(normalized, solver, agd, config, distances)
+    if len(features) == 0:
+        raise MeshError(mesh.name, "no feature points found (no extremity stands out on this shape)")
+    done("features")
+    stage("descriptors")
+    centre = solver.distance(int(np.argmin(agd.values)))
+    grids = darcyan_grids(normalized, solver, features.vertices, config, distances, toward=centre)
+    descriptors = curvature_descriptors(normalized, grids, curvatures)
+    if not np.isfinite(descriptors).any(axis=1).any():
+        raise MeshError(mesh.name, f"mesh too small to carry a Darcyan grid of radius {config.radius} "
+                                   f"(in sqrt(area) units)")
+    done("descriptors")
+    return ShapeDescription(
+        name=mesh.name, n_input_vertices=n_input,
+        feature_vertices=normalized.input_index[features.vertices], feature_agd=features.agd,
+        descriptors=descriptors, changes=changes, timings=timings, mesh=normalized,
+        normalization=normalization, curvatures=curvatures, agd=agd, features=features, grids=grids,
+        solver=solver)
+
+
+def describe_shape(source: str | os.PathLike | Mesh, config: DarcyanConfig = DarcyanConfig(),
+                   repair: bool = False, cache: ShapeCache | None = None, progress=None) -> ShapeDescription:
+    """Describe a mesh file (or :class:`Mesh`); with ``cache``, reuse earlier work on the same
+    file content and parameters (then the intermediate results are ``None``)."""
+    if isinstance(source, Mesh):
+        return analyze_mesh(source, config, repair, progress)
+    path = Path(source)
+    key = None
+    if cache is not None:
+        key = cache.key(file_digest(path), config.fingerprint(*DESCRIBE_FIELDS), f"repair={repair}")
+        stored = cache.load(key)
+        if stored is not None:
+            return ShapeDescription(
+                name=str(path), n_input_vertices=int(stored["n_input_vertices"]),
+                feature_vertices=stored["feature_vertices"], feature_agd=stored["feature_agd"],
+                descriptors=stored["descriptors"], changes=[str(c) for c in stored["changes"]],
+                timings={"cache": 0.0})
+    description = analyze_mesh(load_mesh(path), config, repair, progress)
+    if cache is not None:
+        cache.save(key, description.arrays())
+    return description
+
+
+# The parameters a shape description depends on (matching does not change it).
+DESCRIBE_FIELDS = ("levels", "radial_lines", "radius", "interpolation", "curvature_smoothing",
+                   "agd_sources", "extremity_radius", "min_agd_quantile", "max_features")
+
+
+def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
+                 config: DarcyanConfig = DarcyanConfig()) -> Correspondence:
+    """Match the feature points of ``shape_1`` to those of ``shape_2`` by descriptor distance."""
+    matches = match_descriptors(shape_1.descriptors, shape_2.descriptors, config.matching)
+    return Correspondence(shape_1.feature_vertices[matches.source], shape_2.feature_vertices[matches.target],
+                          matches.distance, matches)
+
+
+def match_files(source, target, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
+                cache: ShapeCache | None = None) -> Correspondence:
+    """:func:`describe_shape` both files and :func:`match_shapes` them."""
+    return match_shapes(describe_shape(source, config, repair, cache), describe_shape(target, config, repair, cache),
+                        config)

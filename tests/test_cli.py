@@ -1,0 +1,111 @@
+"""The command line: output contracts and one-line errors with exit status 2."""
+
+import csv
+import io
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from darcyan import synthetic
+from darcyan.cli import main
+from darcyan.mesh import save_mesh
+
+
+@pytest.fixture(scope="module")
+def pose_files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("poses")
+    paths = []
+    for pose in (0, 1):
+        path = folder / f"figure{pose}.off"
+        save_mesh(synthetic.figure(pose), path)
+        paths.append(path)
+    return paths
+
+
+@pytest.fixture(autouse=True)
+def private_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_match_writes_the_csv_contract(capsys, pose_files, tmp_path):
+    code, out, err = run(capsys, "match", *pose_files)
+    assert code == 0
+    rows = list(csv.DictReader(io.StringIO(out)))
+    assert list(rows[0]) == ["source_vertex", "target_vertex", "distance"]
+    assert len(rows) == 5
+    tips = set(synthetic.figure_tips().tolist())
+    n = synthetic.figure(0).n_vertices
+    for row in rows:
+        assert 0 <= int(row["source_vertex"]) < n and 0 <= int(row["target_vertex"]) < n
+        assert float(row["distance"]) >= 0
+    # The same to a file, and again from the cache.
+    out_file = tmp_path / "m.csv"
+    assert run(capsys, "match", *pose_files, "-o", out_file)[0] == 0
+    assert out_file.read_text() == out
+    assert run(capsys, "match", *pose_files)[1] == out
+    assert tips  # the figure's truth is exercised in test_matching
+
+
+def test_features_and_describe(capsys, pose_files, tmp_path):
+    code, out, _ = run(capsys, "features", pose_files[0])
+    rows = list(csv.DictReader(io.StringIO(out)))
+    assert code == 0 and list(rows[0]) == ["vertex", "agd"] and len(rows) == 5
+    npz = tmp_path / "d.npz"
+    assert run(capsys, "describe", pose_files[0], "-o", npz, "--levels", "4")[0] == 0
+    data = np.load(npz)
+    assert data["descriptor"].shape == (5, 8)
+    np.testing.assert_array_equal(sorted(data["vertex"]), sorted(int(r["vertex"]) for r in rows))
+    csv_path = tmp_path / "d.csv"
+    assert run(capsys, "describe", pose_files[0], "-o", csv_path)[0] == 0
+    assert csv_path.read_text().startswith("vertex,agd,k1max,k1min,k2max")
+
+
+def test_demo_reports_correct_matches(capsys):
+    code, out, _ = run(capsys, "demo")
+    assert code == 0 and "5 of 5 matches correct" in out
+
+
+BAD = {
+    "missing": (None, "no such file"),
+    "unknown.xyz": ("1 2 3", "unsupported file type"),
+    "header.off": ("OFF\n4 x 0\n", "integers"),
+    "nan.off": ("OFF\n4 2 0\n0 0 0\nnan 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n", "NaN"),
+    "range.off": ("OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 7\n", "out of range"),
+    "dup.off": ("OFF\n4 5 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 1 2 3\n", "duplicate"),
+    "tiny.off": ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "too small"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD))
+def test_bad_input_is_one_line_and_exit_2(capsys, tmp_path, name, pose_files):
+    text, message = BAD[name]
+    path = tmp_path / name
+    if text is not None:
+        path.write_text(text)
+    code, out, err = run(capsys, "match", path, pose_files[0])
+    assert code == 2 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("darcyan: error: ") and str(path) in lines[0]
+    assert message in lines[0]
+
+
+def test_tetrahedron_is_too_small_for_a_grid(capsys, tmp_path):
+    path = tmp_path / "tetra.off"
+    path.write_text("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")
+    code, _, err = run(capsys, "features", path)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and str(path) in err
+
+
+def test_installed_entry_point_has_no_traceback(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "darcyan", "match", tmp_path / "a.off", tmp_path / "b.off"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip().count("\n") == 0

@@ -1,0 +1,41 @@
+"""Feature points at extremities known by construction."""
+
+import numpy as np
+import pytest
+
+from darcyan import DarcyanConfig, synthetic
+from darcyan.features import average_geodesic_distance, extremities
+from darcyan.geodesics import GeodesicSolver
+from darcyan.mesh import normalize_mesh, prepare_mesh
+
+
+@pytest.mark.parametrize("pose", [0, 1, 2])
+def test_figure_extremities_are_its_limb_tips(pose):
+    mesh, _ = prepare_mesh(synthetic.figure(pose))
+    mesh, _ = normalize_mesh(mesh)
+    solver = GeodesicSolver(mesh)
+    config = DarcyanConfig()
+    agd = average_geodesic_distance(mesh, solver, config.agd_sources)
+    features = extremities(mesh, solver, agd, config)
+    tips = synthetic.figure_tips()
+    assert len(features) == len(tips)
+    # Each tip has exactly one feature point on it (the tip apex is a small cap: 0.03 sqrt(area)).
+    dist = np.array([solver.distance(t)[features.vertices] for t in tips])
+    assert (dist.min(axis=1) < 0.03).all()
+    assert sorted(np.argmin(dist, axis=0)) == list(range(len(tips)))
+
+
+def test_agd_is_close_to_exact_average_on_sphere(sphere):
+    # On a sphere of radius r every point has mean geodesic distance pi * r / 2.
+    mesh, _ = prepare_mesh(sphere)
+    agd = average_geodesic_distance(mesh, GeodesicSolver(mesh), 16)
+    np.testing.assert_allclose(agd.values, np.pi * 2.0 / 2, rtol=0.05)
+
+
+def test_sphere_has_no_standing_out_extremity_beyond_noise(sphere):
+    mesh, _ = prepare_mesh(sphere)
+    mesh, _ = normalize_mesh(mesh)
+    solver = GeodesicSolver(mesh)
+    config = DarcyanConfig(max_features=3)
+    features = extremities(mesh, solver, average_geodesic_distance(mesh, solver, 16), config)
+    assert len(features) <= 3

@@ -1,0 +1,59 @@
+"""Fast-marching distances against exact ones."""
+
+import numpy as np
+
+from darcyan import synthetic
+from darcyan.geodesics import GeodesicSolver
+from darcyan.mesh import prepare_mesh
+
+# Documented tolerances: first-order fast marching errs by up to about one edge length plus a
+# small fraction of the distance (wavefronts crossing triangles at an angle).
+RTOL = 0.02
+
+
+def mean_edge(mesh):
+    e = mesh.edges()
+    return np.linalg.norm(mesh.vertices[e[:, 0]] - mesh.vertices[e[:, 1]], axis=1).mean()
+
+
+def test_plane_distances_are_euclidean():
+    mesh, _ = prepare_mesh(synthetic.flat_disc(radius=1.0, rings=40))
+    centre = int(np.argmin(np.linalg.norm(mesh.vertices, axis=1)))
+    d = GeodesicSolver(mesh).distance(centre)
+    exact = np.linalg.norm(mesh.vertices - mesh.vertices[centre], axis=1)
+    far = exact > 0.2
+    np.testing.assert_allclose(d[far], exact[far], rtol=RTOL, atol=mean_edge(mesh))
+
+
+def test_sphere_distances_are_great_circle_arcs(sphere):
+    mesh, _ = prepare_mesh(sphere)
+    r = 2.0
+    solver = GeodesicSolver(mesh)
+    for source in (0, 1234, 9000):
+        d = solver.distance(source)
+        unit = mesh.vertices / r
+        exact = r * np.arccos(np.clip(unit @ unit[source], -1, 1))
+        ok = (exact > 0.3) & (exact < np.pi * r - 0.3)  # away from the source and its antipode
+        np.testing.assert_allclose(d[ok], exact[ok], rtol=RTOL, atol=mean_edge(mesh))
+
+
+def test_traced_geodesic_on_sphere_is_a_great_circle(sphere):
+    mesh, _ = prepare_mesh(sphere)
+    solver = GeodesicSolver(mesh)
+    path = solver.trace(0, np.cross(mesh.vertices[0], [0.3, 1.0, 0.2]), 2.0)
+    normal = np.cross(mesh.vertices[0], path[-1])
+    normal /= np.linalg.norm(normal)
+    assert np.abs(path @ normal).max() < 0.01  # stays in the plane through the centre
+    assert np.isclose(np.linalg.norm(np.diff(path, axis=0), axis=1).sum(), 2.0, rtol=0.01)
+
+
+def test_locate_recovers_surface_points(sphere):
+    mesh, _ = prepare_mesh(sphere)
+    solver = GeodesicSolver(mesh)
+    rng = np.random.default_rng(1)
+    faces = rng.integers(0, mesh.n_faces, 50)
+    bary = rng.dirichlet(np.ones(3), 50)
+    points = np.einsum("kj,kjd->kd", bary, mesh.vertices[mesh.faces[faces]])
+    f, b = solver.locate(points)
+    back = np.einsum("kj,kjd->kd", b, mesh.vertices[mesh.faces[f]])
+    np.testing.assert_allclose(back, points, atol=1e-9)

@@ -1,0 +1,147 @@
+"""Reading, writing, checking and repairing meshes."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from darcyan import MeshError, MeshWarning, synthetic
+from darcyan.mesh import Mesh, load_mesh, normalize_mesh, prepare_mesh, save_mesh
+
+TETRA_V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+TETRA_F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+
+
+def write(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_bytes(text.encode() if isinstance(text, str) else text)
+    return path
+
+
+@pytest.mark.parametrize("ext", [".off", ".ply", ".obj"])
+def test_round_trip_keeps_vertices_and_faces(tmp_path, ext, figure_poses):
+    mesh = figure_poses[0]
+    path = tmp_path / f"m{ext}"
+    if ext == ".obj":
+        lines = [f"v {x:.17g} {y:.17g} {z:.17g}" for x, y, z in mesh.vertices] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.faces]
+        path.write_text("\n".join(lines))
+    else:
+        save_mesh(mesh, path)
+    back = load_mesh(path)
+    np.testing.assert_allclose(back.vertices, mesh.vertices, rtol=1e-7)
+    np.testing.assert_array_equal(back.faces, mesh.faces)
+
+
+def test_binary_and_ascii_ply(tmp_path):
+    import trimesh
+
+    t = trimesh.Trimesh(TETRA_V, TETRA_F, process=False)
+    for encoding in ("binary", "ascii"):
+        path = tmp_path / f"{encoding}.ply"
+        path.write_bytes(t.export(file_type="ply", encoding=encoding))
+        back = load_mesh(path)
+        np.testing.assert_array_equal(back.faces, TETRA_F)
+
+
+def test_tosca_vert_tri_pair(tmp_path):
+    np.savetxt(tmp_path / "t.vert", TETRA_V)
+    np.savetxt(tmp_path / "t.tri", TETRA_F + 1, fmt="%d")
+    for name in ("t.vert", "t.tri"):
+        back = load_mesh(tmp_path / name)
+        np.testing.assert_array_equal(back.faces, TETRA_F)
+
+
+def test_polygons_are_split_with_a_warning(tmp_path):
+    path = write(tmp_path, "q.off", "OFF\n5 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n4 0 1 2 3\n3 0 1 4\n")
+    with pytest.warns(MeshWarning, match="split"):
+        mesh = load_mesh(path)
+    assert mesh.n_faces == 3
+
+
+BAD_OFF = {
+    "empty.off": ("", "empty"),
+    "header.off": ("PLY\n3 1 0\n", "not an OFF file"),
+    "counts.off": ("OFF\nthree 1 0\n", "integers"),
+    "truncated.off": ("OFF\n4 4 0\n0 0 0\n1 0 0\n", "truncated"),
+    "text.off": ("OFF\n4 1 0\n0 0 0\n1 zero 0\n0 1 0\n0 0 1\n3 0 1 2\n", "line 4"),
+    "nan.off": ("OFF\n4 2 0\n0 0 0\nnan 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n", "NaN"),
+    "inf.off": ("OFF\n4 2 0\n0 0 0\ninf 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n", "NaN or infinite"),
+    "range.off": ("OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 9\n", "out of range"),
+    "negative.off": ("OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 -1 3\n", "negative"),
+    # The vertex count one more / one less than the real one.
+    "plus_one.off": ("OFF\n5 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n", "truncated"),
+    "minus_one.off": ("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n", "count in the header is wrong"),
+    "extra.off": ("OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n", "after the last face"),
+    "binary.off": (b"\x00\x01\x02garbage\xff" * 10, "binary"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD_OFF))
+def test_malformed_files_raise_mesh_error_naming_file(tmp_path, name):
+    text, message = BAD_OFF[name]
+    path = write(tmp_path, name, text)
+    with pytest.raises(MeshError, match=message) as info:
+        load_mesh(path)
+    assert str(path) in str(info.value)
+
+
+def test_missing_file_and_unknown_extension(tmp_path):
+    with pytest.raises(MeshError, match="no such file"):
+        load_mesh(tmp_path / "nothing.off")
+    with pytest.raises(MeshError, match="unsupported file type"):
+        load_mesh(write(tmp_path, "m.stl", "solid"))
+
+
+def test_garbage_ply_is_a_mesh_error(tmp_path):
+    with pytest.raises(MeshError):
+        load_mesh(write(tmp_path, "g.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 9\n\xff\xfe"))
+
+
+def test_duplicate_and_degenerate_faces_need_repair():
+    faces = np.vstack([TETRA_F, TETRA_F[:1], [[0, 0, 1]]])
+    with pytest.raises(MeshError, match="1 duplicate faces, 1 degenerate"):
+        prepare_mesh(Mesh(TETRA_V, faces, "dup"))
+    mesh, changes = prepare_mesh(Mesh(TETRA_V, faces, "dup"), repair=True)
+    assert mesh.n_faces == 4 and len(changes) == 2
+
+
+def test_unreferenced_vertices_are_dropped_on_repair_keeping_input_numbering():
+    vertices = np.vstack([[[9, 9, 9]], TETRA_V])
+    with pytest.raises(MeshError, match="unreferenced"):
+        prepare_mesh(Mesh(vertices, TETRA_F + 1))
+    mesh, _ = prepare_mesh(Mesh(vertices, TETRA_F + 1), repair=True)
+    np.testing.assert_array_equal(mesh.input_index, [1, 2, 3, 4])
+
+
+def test_non_manifold_edge_is_refused():
+    vertices = np.vstack([TETRA_V, [[1, 1, 1]]])
+    faces = np.vstack([TETRA_F, [[1, 2, 4]]])  # edge 1-2 now has three faces
+    with pytest.raises(MeshError, match="non-manifold edges"):
+        prepare_mesh(Mesh(vertices, faces))
+
+
+def test_bow_tie_vertex_is_refused():
+    second = TETRA_V + [3, 0, 0]
+    second[0] = TETRA_V[1]  # share vertex 1 only
+    vertices = np.vstack([TETRA_V, second[1:]])
+    f2 = TETRA_F.copy()
+    f2 = np.where(f2 == 0, 1, f2 + 3)
+    with pytest.raises(MeshError, match="non-manifold vertices"):
+        prepare_mesh(Mesh(vertices, np.vstack([TETRA_F, f2])))
+
+
+def test_several_components_keep_the_largest_with_a_warning():
+    big = synthetic.icosphere(3, 2.0)
+    small = synthetic.icosphere(1, 0.5)
+    vertices = np.vstack([small.vertices + 10, big.vertices])
+    faces = np.vstack([small.faces, big.faces + small.n_vertices])
+    with pytest.warns(MeshWarning, match="2 connected components"):
+        mesh, _ = prepare_mesh(Mesh(vertices, faces))
+    assert mesh.n_vertices == big.n_vertices
+    np.testing.assert_array_equal(mesh.input_index, np.arange(big.n_vertices) + small.n_vertices)
+
+
+def test_normalization_gives_unit_area_centred(figure_poses):
+    mesh, norm = normalize_mesh(figure_poses[0])
+    assert np.isclose(mesh.area(), 1.0)
+    assert np.isclose(norm.to_input_length(1.0), np.sqrt(figure_poses[0].area()))
