@@ -59,13 +59,21 @@ def _write_text(text: str, output: str | None) -> None:
         raise DarcyanError(f"{output}: cannot write ({exc.strerror or exc})") from None
 
 
+def _note_changes(shape) -> None:
+    """One ``darcyan: note: <file>: <change>`` line on stderr per repair applied to the input."""
+    for change in shape.changes:
+        print(f"darcyan: note: {shape.name}: {change}", file=sys.stderr)
+
+
 def cmd_match(args: argparse.Namespace) -> int:
     from .pipeline import describe_shape, match_shapes
 
     config = _config(args)
     cache = _cache(args)
     shape_1 = describe_shape(args.source, config, args.repair, cache)
+    _note_changes(shape_1)
     shape_2 = describe_shape(args.target, config, args.repair, cache)
+    _note_changes(shape_2)
     correspondence = match_shapes(shape_1, shape_2, config)
     _write_text(correspondence.to_csv(), args.output)
     return 0
@@ -75,6 +83,7 @@ def cmd_features(args: argparse.Namespace) -> int:
     from .pipeline import describe_shape
 
     shape = describe_shape(args.mesh, _config(args), args.repair, _cache(args))
+    _note_changes(shape)
     lines = ["vertex,agd"] + [f"{v},{a:.6g}" for v, a in zip(shape.feature_vertices, shape.feature_agd)]
     _write_text("\n".join(lines) + "\n", args.output)
     return 0
@@ -85,6 +94,7 @@ def cmd_describe(args: argparse.Namespace) -> int:
 
     config = _config(args)
     shape = describe_shape(args.mesh, config, args.repair, _cache(args))
+    _note_changes(shape)
     out = Path(args.output)
     if out.suffix.lower() == ".npz":
         try:
