@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-CACHE_FORMAT = "1"
+CACHE_FORMAT = "2"
 
 
 def default_cache_dir() -> Path:

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from .errors import ConfigError
 
-MATCHING_MODES = ("nearest", "one-to-one")
+MATCHING_MODES = ("consistent", "nearest", "one-to-one")
 
 
 @dataclass(frozen=True)
@@ -33,13 +33,17 @@ class DarcyanConfig:
             principal curvatures before they are sampled (0 = raw Meyer operators).
         agd_sources: number of farthest-point-sampled sources whose fast-marching distances are
             averaged to approximate the Average Geodesic Distance (exact AGD would need V solves).
+        agd_smoothing: length scale of a heat diffusion of the AGD field before its maxima are
+            taken (0: the paper's plain AGD). Makes feature points repeat across poses.
         extremity_radius: a feature point is a vertex whose AGD is the largest within this
             geodesic radius (greedy non-maximum suppression over one-ring maxima).
         min_agd_quantile: one-ring maxima whose AGD is below this quantile of the AGD over the
             vertices are discarded: extremities are far from everything, dents are not.
         max_features: keep at most this many feature points (highest AGD first); 0 = no limit.
-        matching: ``"nearest"`` (the paper: each source point takes its nearest target
-            descriptor) or ``"one-to-one"`` (optimal assignment, each target used once).
+        matching: ``"consistent"`` (one-to-one, partial, trading descriptor distance against
+            preserved geodesic distances and orientation: no left/right swaps), ``"nearest"``
+            (the paper: each source point takes its nearest target descriptor) or
+            ``"one-to-one"`` (optimal assignment on descriptor distance alone).
     """
 
     levels: int = 6
@@ -48,10 +52,11 @@ class DarcyanConfig:
     interpolation: int = 2
     curvature_smoothing: int = 2
     agd_sources: int = 24
-    extremity_radius: float = 0.15
+    agd_smoothing: float = 0.07
+    extremity_radius: float = 0.25
     min_agd_quantile: float = 0.5
     max_features: int = 0
-    matching: str = "nearest"
+    matching: str = "consistent"
 
     def __post_init__(self) -> None:
         positive_ints = ("levels", "radial_lines", "interpolation", "agd_sources")
@@ -65,6 +70,8 @@ class DarcyanConfig:
             value = getattr(self, name)
             if not isinstance(value, int) or value < 0:
                 raise ConfigError(f"config: {name} must be a non-negative integer, got {value!r}")
+        if not (isinstance(self.agd_smoothing, (int, float)) and 0 <= self.agd_smoothing < 10):
+            raise ConfigError(f"config: agd_smoothing must be a length >= 0, got {self.agd_smoothing!r}")
         for name in ("radius", "extremity_radius"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and 0 < value < 10):

@@ -171,3 +171,4 @@ def _level_crossings(path: np.ndarray, u: np.ndarray, radii: np.ndarray) -> np.n
     t = np.where(u1 > u0, (radii[ok] - u0) / np.where(u1 > u0, u1 - u0, 1.0), 0.0)
     out[ok] = path[j - 1] + t[:, None] * (path[j] - path[j - 1])
     return out
+

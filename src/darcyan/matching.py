@@ -63,3 +63,84 @@ def match_descriptors(desc_1: np.ndarray, desc_2: np.ndarray, mode: str = "neare
     else:
         raise ConfigError(f"matching mode must be 'nearest' or 'one-to-one', got {mode!r}")
     return Matches(src.astype(np.int64), tgt.astype(np.int64), dist[src, tgt])
+
+
+@dataclass(frozen=True)
+class ConsistencyWeights:
+    """Weights of :func:`consistent_candidates`' score (see there); all terms are dimensionless.
+
+    Chosen on tosca-5k (``docs/parameters.md``): geodesic distances between true corresponding
+    feature points change by 4% (median) to 28% (99th percentile) between TOSCA poses, hence the
+    wide tolerance.
+    """
+
+    geodesic_tolerance: float = 0.3  # relative change of a geodesic distance still counted as kept
+    geodesic: float = 0.5  # weight of one pair of matches keeping (+) or breaking (-) its distance
+    beam_width: int = 128
+
+
+def consistent_matching(desc_1: np.ndarray, desc_2: np.ndarray, geodesics_1: np.ndarray, geodesics_2: np.ndarray,
+                        weights: ConsistencyWeights = ConsistencyWeights()) -> Matches:
+    """The best of :func:`consistent_candidates`."""
+    return consistent_candidates(desc_1, desc_2, geodesics_1, geodesics_2, weights)[0][1]
+
+
+def consistent_candidates(desc_1: np.ndarray, desc_2: np.ndarray, geodesics_1: np.ndarray, geodesics_2: np.ndarray,
+                          weights: ConsistencyWeights = ConsistencyWeights()) -> list[tuple[float, Matches]]:
+    """One-to-one partial matchings that keep the shapes' layout, best first: ``(score, matches)``.
+
+    Maximizes over assignments pi (each target used at most once; a source may stay unmatched)
+
+        sum_i (1 - D(i, pi(i)) / median(D))                       descriptor similarity
+      + w_g * sum_{i<j} kept(d1(i, j), d2(pi(i), pi(j)))            geodesic layout
+
+    by beam search, where ``kept`` is +1 for a geodesic distance that changes by less than
+    ``geodesic_tolerance`` relatively, falling smoothly to -1 beyond. This rejects assignments
+    that break the metric (a left hand with a right foot). Unmatched sources contribute 0, so a
+    point whose counterpart was not detected is left out rather than forced onto a wrong one. A
+    mirror image keeps every distance: it scores like the true matching and is among the
+    candidates; :func:`darcyan.symmetry.choose_orientation` tells them apart.
+
+    Args:
+        desc_1, desc_2: ``(k1, d)``, ``(k2, d)`` descriptors.
+        geodesics_1, geodesics_2: ``(k1, k1)``, ``(k2, k2)`` geodesic distances between feature points.
+    """
+    k1, k2 = len(desc_1), len(desc_2)
+    dist = descriptor_distances(desc_1, desc_2)
+    if k1 == 0 or k2 == 0:
+        empty = np.zeros(0, np.int64)
+        return [(0.0, Matches(empty, empty, np.zeros(0)))]
+    finite = dist[np.isfinite(dist)]
+    scale = float(np.median(finite)) if len(finite) and np.median(finite) > 0 else 1.0
+    unary = np.where(np.isfinite(dist), 1.0 - dist / scale, -np.inf)
+
+    # Sources with the most distinctive best match first: early choices steer the beam.
+    ranked = np.sort(-unary, axis=1)
+    margin = ranked[:, 1] - ranked[:, 0] if k2 > 1 else np.zeros(k1)
+    order = np.argsort(-margin, kind="stable")
+    beams = [(0.0, ())]  # (score, ((source, target or -1), ...))
+    for i in order:
+        candidates = []
+        for score, assignment in beams:
+            gain = unary[i].copy()  # (k2,) score of matching i to each target
+            matched = [(s, t) for s, t in assignment if t >= 0]
+            if matched:
+                src = np.array([s for s, _ in matched], dtype=np.int64)
+                tgt = np.array([t for _, t in matched], dtype=np.int64)
+                g1 = geodesics_1[i, src][None, :]
+                g2 = geodesics_2[:, tgt]
+                change = np.abs(g1 - g2) / np.maximum(0.5 * (g1 + g2), 1e-12) / weights.geodesic_tolerance
+                gain += weights.geodesic * (1.0 - 2.0 * np.minimum(change**2, 1.0)).sum(axis=1)
+                gain[tgt] = -np.inf
+            for t in np.flatnonzero(np.isfinite(gain)):
+                candidates.append((score + gain[t], assignment + ((int(i), int(t)),)))
+            candidates.append((score, assignment + ((int(i), -1),)))
+        candidates.sort(key=lambda c: -c[0])
+        beams = candidates[:weights.beam_width]
+    out = []
+    for score, assignment in beams:
+        pairs = sorted((s, t) for s, t in assignment if t >= 0)
+        src = np.array([s for s, _ in pairs], dtype=np.int64)
+        tgt = np.array([t for _, t in pairs], dtype=np.int64)
+        out.append((float(score), Matches(src, tgt, dist[src, tgt] if len(src) else np.zeros(0))))
+    return out

@@ -21,9 +21,10 @@ from .curvature import Curvatures, principal_curvatures
 from .descriptors import curvature_descriptors
 from .errors import MeshError
 from .features import AGD, FeaturePoints, average_geodesic_distance, extremities
-from .geodesics import GeodesicSolver
+from .geodesics import GeodesicSolver, vertex_normals
+from .symmetry import OrientedSurface, choose_orientation, curvature_signature
 from .grid import DarcyanGrid, darcyan_grids
-from .matching import Matches, match_descriptors
+from .matching import Matches, consistent_candidates, match_descriptors
 from .mesh import Mesh, Normalization, load_mesh, normalize_mesh, prepare_mesh
 
 
@@ -37,6 +38,9 @@ class ShapeDescription:
         feature_vertices: ``(k,) int64`` feature points as 0-based vertex indices of the input file.
         feature_agd: ``(k,)`` their AGD, in units of sqrt(area).
         descriptors: ``(k, 2n)`` ``[k1max, k1min, ...]`` per feature point, 1/sqrt(area) units.
+        feature_geodesics: ``(k, k)`` geodesic distances between the feature points (sqrt(area)).
+        surface: what the mirror test needs (positions, normals, feature distance fields, a point
+            signature) on the prepared, normalized mesh; see :mod:`darcyan.symmetry`.
         changes: repairs applied to the input (empty without ``repair``).
         timings: seconds per stage.
         mesh, normalization, curvatures, agd, features, grids, solver: the intermediate results
@@ -48,6 +52,8 @@ class ShapeDescription:
     feature_vertices: np.ndarray
     feature_agd: np.ndarray
     descriptors: np.ndarray
+    feature_geodesics: np.ndarray
+    surface: OrientedSurface | None = None
     changes: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
     mesh: Mesh | None = None
@@ -63,9 +69,13 @@ class ShapeDescription:
 
     def arrays(self) -> dict:
         """The cacheable part, as arrays."""
-        return {"feature_vertices": self.feature_vertices, "feature_agd": self.feature_agd,
-                "descriptors": self.descriptors, "n_input_vertices": np.array(self.n_input_vertices),
-                "changes": np.array(self.changes, dtype=str)}
+        arrays = {"feature_vertices": self.feature_vertices, "feature_agd": self.feature_agd,
+                  "descriptors": self.descriptors, "feature_geodesics": self.feature_geodesics,
+                  "n_input_vertices": np.array(self.n_input_vertices),
+                  "changes": np.array(self.changes, dtype=str)}
+        if self.surface is not None:
+            arrays.update({f"surface_{k}": v for k, v in vars(self.surface).items() if v is not None})
+        return arrays
 
 
 @dataclass(frozen=True)
@@ -120,7 +130,7 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     curvatures = principal_curvatures(normalized, smoothing=config.curvature_smoothing)
     done("curvature")
     stage("agd")
-    agd = average_geodesic_distance(normalized, solver, config.agd_sources)
+    agd = average_geodesic_distance(normalized, solver, config.agd_sources, config.agd_smoothing)
     done("agd")
     stage("features")
     distances: dict = {}
@@ -136,12 +146,26 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
         raise MeshError(mesh.name, f"mesh too small to carry a Darcyan grid of radius {config.radius} "
                                    f"(in sqrt(area) units)")
     done("descriptors")
+    stage("layout")
+    geodesics = feature_geodesics(features.vertices, distances)
+    surface = OrientedSurface(
+        normalized.vertices.astype(np.float32), vertex_normals(normalized).astype(np.float32),
+        np.array([distances[int(v)] for v in features.vertices], dtype=np.float32),
+        curvature_signature(normalized, curvatures.mean).astype(np.float32))
+    done("layout")
     return ShapeDescription(
         name=mesh.name, n_input_vertices=n_input,
         feature_vertices=normalized.input_index[features.vertices], feature_agd=features.agd,
-        descriptors=descriptors, changes=changes, timings=timings, mesh=normalized,
+        descriptors=descriptors, feature_geodesics=geodesics, surface=surface,
+        changes=changes, timings=timings, mesh=normalized,
         normalization=normalization, curvatures=curvatures, agd=agd, features=features, grids=grids,
         solver=solver)
+
+
+def feature_geodesics(vertices: np.ndarray, distances: dict) -> np.ndarray:
+    """``(k, k)`` geodesic distances between feature ``vertices``, from their distance fields."""
+    geodesics = np.array([[distances[int(b)][int(a)] for b in vertices] for a in vertices]).reshape(len(vertices), -1)
+    return 0.5 * (geodesics + geodesics.T)  # fast marching is not exactly symmetric
 
 
 def describe_shape(source: str | os.PathLike | Mesh, config: DarcyanConfig = DarcyanConfig(),
@@ -159,7 +183,10 @@ def describe_shape(source: str | os.PathLike | Mesh, config: DarcyanConfig = Dar
             return ShapeDescription(
                 name=str(path), n_input_vertices=int(stored["n_input_vertices"]),
                 feature_vertices=stored["feature_vertices"], feature_agd=stored["feature_agd"],
-                descriptors=stored["descriptors"], changes=[str(c) for c in stored["changes"]],
+                descriptors=stored["descriptors"], feature_geodesics=stored["feature_geodesics"],
+                surface=OrientedSurface(stored["surface_points"], stored["surface_normals"],
+                                        stored["surface_landmark_distances"], stored.get("surface_signature")),
+                changes=[str(c) for c in stored["changes"]],
                 timings={"cache": 0.0})
     description = analyze_mesh(load_mesh(path), config, repair, progress)
     if cache is not None:
@@ -169,13 +196,18 @@ def describe_shape(source: str | os.PathLike | Mesh, config: DarcyanConfig = Dar
 
 # The parameters a shape description depends on (matching does not change it).
 DESCRIBE_FIELDS = ("levels", "radial_lines", "radius", "interpolation", "curvature_smoothing",
-                   "agd_sources", "extremity_radius", "min_agd_quantile", "max_features")
+                   "agd_sources", "agd_smoothing", "extremity_radius", "min_agd_quantile", "max_features")
 
 
 def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
                  config: DarcyanConfig = DarcyanConfig()) -> Correspondence:
     """Match the feature points of ``shape_1`` to those of ``shape_2`` by descriptor distance."""
-    matches = match_descriptors(shape_1.descriptors, shape_2.descriptors, config.matching)
+    if config.matching == "consistent":
+        candidates = consistent_candidates(shape_1.descriptors, shape_2.descriptors, shape_1.feature_geodesics,
+                                           shape_2.feature_geodesics)
+        matches = choose_orientation(candidates, shape_1.surface, shape_2.surface)
+    else:
+        matches = match_descriptors(shape_1.descriptors, shape_2.descriptors, config.matching)
     return Correspondence(shape_1.feature_vertices[matches.source], shape_2.feature_vertices[matches.target],
                           matches.distance, matches)
 

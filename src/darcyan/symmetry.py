@@ -1,0 +1,117 @@
+"""Telling a correspondence from its mirror image.
+
+An intrinsic left/right symmetry keeps every geodesic distance, so descriptors and distances
+cannot tell a matching from its mirror image. Orientation can: a map between consistently
+oriented surfaces that follows the true correspondence keeps the turning sense of small
+triangles, a mirror map reverses it.
+
+:func:`orientation_agreement` extends a landmark correspondence to a coarse map (each point goes
+to the target point with the most similar geodesic distances to the matched landmarks) and
+measures how many small triangles of sample points keep their orientation under it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+# Sample points on the source; their spacing sets the size of the test triangles (area 1:
+# spacing about 1/sqrt(SAMPLES) = 0.07 in sqrt(area) units, above the coarse map's error).
+SAMPLES = 200
+# A triangle votes only when it is far from degenerate on both shapes (|sin| of its corner).
+MIN_SINE = 0.3
+# Diffusion lengths (sqrt(area) units) of the mean curvature making up the point signature, and
+# its weight against landmark distances (chosen on tosca-5k, docs/parameters.md).
+SIGNATURE_LENGTHS = (0.05, 0.1, 0.2)
+SIGNATURE_WEIGHT = 0.3
+# Candidates (best first) whose orientation is tested, and the score of full agreement per match.
+CANDIDATES_TESTED = 8
+ORIENTATION_WEIGHT = 1.0
+
+
+@dataclass(frozen=True)
+class OrientedSurface:
+    """What the orientation test needs of one shape.
+
+    Attributes:
+        points: ``(n, 3)`` vertex positions (normalized mesh).
+        normals: ``(n, 3)`` outward unit vertex normals.
+        landmark_distances: ``(k, n)`` geodesic distance from each feature point to every vertex.
+        signature: optional ``(n, h)`` intrinsic point signature (e.g. heat kernel signature),
+            mirror-blind but telling apart points that landmark distances confuse (the front and
+            back of a torso or a limb); scaled to be comparable with the distances.
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    landmark_distances: np.ndarray
+    signature: np.ndarray | None = None
+
+
+def curvature_signature(mesh, mean_curvature: np.ndarray) -> np.ndarray:
+    """``(n, 3)`` mean curvature diffused over ``SIGNATURE_LENGTHS``, each scaled to mean
+    magnitude 1 and weighted by ``SIGNATURE_WEIGHT``: a cheap, intrinsic, mirror-blind signature
+    that differs between the front and the back of a torso or a limb."""
+    from .features import heat_diffuse
+
+    columns = []
+    for length in SIGNATURE_LENGTHS:
+        c = heat_diffuse(mesh, mean_curvature, length)
+        columns.append(c / max(float(np.abs(c).mean()), 1e-12))
+    return SIGNATURE_WEIGHT * np.stack(columns, axis=1)
+
+
+def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2: OrientedSurface | None):
+    """Among ``candidates`` ``[(score, Matches), ...]`` (best first, from
+    :func:`darcyan.matching.consistent_candidates`), the matches with the best score plus
+    ``ORIENTATION_WEIGHT * orientation_agreement * len(matches)``: a mirror image loses against
+    the orientation-preserving matching it ties with. Without surfaces: the best score."""
+    if surface_1 is None or surface_2 is None:
+        return candidates[0][1]
+    best, best_total = candidates[0][1], -np.inf
+    for score, matches in candidates[:CANDIDATES_TESTED]:
+        agreement = orientation_agreement(surface_1, surface_2, matches.source, matches.target)
+        total = score + ORIENTATION_WEIGHT * agreement * len(matches)
+        if total > best_total:
+            best, best_total = matches, total
+    return best
+
+
+def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface, landmarks_1: np.ndarray,
+                          landmarks_2: np.ndarray, seed: int = 0) -> float:
+    """In [-1, 1]: +1 when the correspondence ``landmarks_1[i] <-> landmarks_2[i]`` (indices into
+    the feature sets) preserves orientation everywhere, -1 when it is a mirror image; 0 when
+    fewer than 3 landmarks make the test meaningless."""
+    if len(landmarks_1) < 3:
+        return 0.0
+    n1 = len(surface_1.points)
+    rng = np.random.default_rng(seed)
+    samples = rng.choice(n1, size=min(SAMPLES, n1), replace=False)
+    embed_1 = surface_1.landmark_distances[landmarks_1][:, samples].T  # (s, m)
+    embed_2 = surface_2.landmark_distances[landmarks_2].T  # (n2, m)
+    if surface_1.signature is not None and surface_2.signature is not None:
+        embed_1 = np.hstack([embed_1, surface_1.signature[samples]])
+        embed_2 = np.hstack([embed_2, surface_2.signature])
+    image = cKDTree(embed_2).query(embed_1)[1]  # each sample's image on shape 2
+    x = surface_1.points[samples]
+    _, neighbours = cKDTree(x).query(x, k=3)
+    q, r = neighbours[:, 1], neighbours[:, 2]
+    s1 = _corner_sine(x, surface_1.normals[samples], np.arange(len(samples)), q, r)
+    y = surface_2.points[image]
+    s2 = _corner_sine(y, surface_2.normals[image], np.arange(len(samples)), q, r)
+    votes = (np.abs(s1) >= MIN_SINE) & (np.abs(s2) >= MIN_SINE)
+    if not votes.any():
+        return 0.0
+    return float(np.mean(np.sign(s1[votes]) * np.sign(s2[votes])))
+
+
+def _corner_sine(points, normals, p, q, r) -> np.ndarray:
+    """Signed sine of the corner at p of triangles (p, q, r) about the normal at p."""
+    u = points[q] - points[p]
+    v = points[r] - points[p]
+    cross = np.cross(u, v)
+    denom = np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(denom > 0, np.einsum("ij,ij->i", cross, normals) / denom, 0.0)
