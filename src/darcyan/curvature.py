@@ -52,7 +52,11 @@ def _corner_geometry(mesh: Mesh):
 
 def mixed_voronoi_area(mesh: Mesh) -> np.ndarray:
     """``(n,)`` Meyer's mixed area: Voronoi for non-obtuse triangles, else 1/2 or 1/4 of the face."""
-    cot, angles, sq_len, area = _corner_geometry(mesh)
+    return _mixed_area(mesh, *_corner_geometry(mesh))
+
+
+def _mixed_area(mesh: Mesh, cot, angles, sq_len, area) -> np.ndarray:
+    """:func:`mixed_voronoi_area` from the corner geometry already computed."""
     f = mesh.faces
     # Voronoi share of corner i: (|e_{i+1}|^2 cot(angle i+1) + |e_{i+2}|^2 cot(angle i+2)) / 8,
     # e_j being the edge opposite corner j (so e_{i+1}, e_{i+2} are the edges at corner i).
@@ -69,17 +73,23 @@ def mixed_voronoi_area(mesh: Mesh) -> np.ndarray:
 
 def cotangent_laplacian(mesh: Mesh) -> sp.csr_matrix:
     """``(n, n)`` L with ``(L x)_i = sum_j (cot a_ij + cot b_ij) / 2 * (x_j - x_i)`` (negative semidefinite)."""
-    cot, _, _, _ = _corner_geometry(mesh)
+    return _cotangent_matrix(mesh, _corner_geometry(mesh)[0])
+
+
+def _cotangent_matrix(mesh: Mesh, cot: np.ndarray) -> sp.csr_matrix:
+    """:func:`cotangent_laplacian` from the corner cotangents ``(m, 3)`` already computed."""
     f = mesh.faces
-    rows, cols, vals = [], [], []
-    for i in range(3):  # corner i's cotangent weights the edge opposite it
-        a, b = f[:, (i + 1) % 3], f[:, (i + 2) % 3]
-        rows += [a, b]
-        cols += [b, a]
-        vals += [cot[:, i] / 2, cot[:, i] / 2]
     n = mesh.n_vertices
-    off = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
-    return (off - sp.diags(np.asarray(off.sum(axis=1)).ravel())).tocsr()
+    # Corner i's cotangent weights the edge opposite it, (f[:, i+1], f[:, i+2]), both ways; the
+    # diagonal holds minus each row's sum. One COO assembly, duplicates summed by tocsr().
+    a, b = f[:, [1, 2, 0]].ravel(), f[:, [2, 0, 1]].ravel()
+    half = cot.ravel() / 2
+    weight_sum = np.bincount(a, weights=half, minlength=n) + np.bincount(b, weights=half, minlength=n)
+    diagonal = np.arange(n)
+    rows = np.concatenate([a, b, diagonal])
+    cols = np.concatenate([b, a, diagonal])
+    vals = np.concatenate([half, half, -weight_sum])
+    return sp.coo_matrix((vals, (rows, cols)), shape=(n, n)).tocsr()
 
 
 def principal_curvatures(mesh: Mesh, smoothing: int = 0) -> Curvatures:
@@ -95,12 +105,13 @@ def principal_curvatures(mesh: Mesh, smoothing: int = 0) -> Curvatures:
     Returns:
         :class:`Curvatures` in 1/(mesh length unit).
     """
-    _, angles, _, _ = _corner_geometry(mesh)
+    geometry = _corner_geometry(mesh)  # computed once, shared by the three operators below
+    angles = geometry[1]
     f = mesh.faces
     n = mesh.n_vertices
-    area = mixed_voronoi_area(mesh)
+    area = _mixed_area(mesh, *geometry)
     safe_area = np.where(area > 0, area, np.inf)
-    laplace_x = cotangent_laplacian(mesh) @ mesh.vertices  # = -2 A H n
+    laplace_x = _cotangent_matrix(mesh, geometry[0]) @ mesh.vertices  # = -2 A H n
     normals = vertex_normals(mesh)
     mean = -np.einsum("ij,ij->i", laplace_x, normals) / (2.0 * safe_area)
     angle_sum = np.bincount(f.ravel(), weights=angles.ravel(), minlength=n)
@@ -122,9 +133,7 @@ def smooth_vertex_fields(mesh: Mesh, fields, iterations: int, area: np.ndarray |
         area = mixed_voronoi_area(mesh)
     weighted = adjacency @ sp.diags(area)
     weighted = sp.diags(1.0 / np.asarray(weighted.sum(axis=1)).ravel()) @ weighted
-    out = []
-    for field in fields:
-        for _ in range(iterations):
-            field = weighted @ field
-        out.append(field)
-    return out
+    stacked = np.stack([np.asarray(field, dtype=np.float64) for field in fields], axis=1)  # (n, k)
+    for _ in range(iterations):
+        stacked = weighted @ stacked  # all fields in one sparse product per iteration
+    return [stacked[:, i] for i in range(stacked.shape[1])]

@@ -97,9 +97,9 @@ def vertex_normals(mesh: Mesh) -> np.ndarray:
     """``(n, 3)`` unit area-weighted vertex normals (outward for an outward-oriented mesh)."""
     v, f = mesh.vertices, mesh.faces
     face_n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])  # length = 2 * area
-    normals = np.zeros_like(v)
-    for i in range(3):
-        np.add.at(normals, f[:, i], face_n)
+    corners = f.ravel()
+    normals = np.stack([np.bincount(corners, weights=np.repeat(face_n[:, k], 3), minlength=len(v))
+                        for k in range(3)], axis=1)  # sum of the adjacent faces' area vectors
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     return normals / np.where(length == 0, 1.0, length)
 

@@ -756,22 +756,18 @@ def _check_vertex_manifold(mesh: Mesh) -> None:
     """Refuse a vertex whose faces form more than one fan (a 'bow tie'): the solvers cannot."""
     f = mesh.faces
     n_faces = len(f)
-    half_edges = np.stack([f[:, [0, 1, 2]].ravel(), f[:, [1, 2, 0]].ravel()], axis=1)
-    face_of = np.repeat(np.arange(n_faces), 3)
-    key = np.sort(half_edges, axis=1)
-    order = np.lexsort((key[:, 1], key[:, 0]))
-    same = np.all(key[order][1:] == key[order][:-1], axis=1)
-    h1, h2 = order[:-1][same], order[1:][same]  # half-edges on one undirected (manifold) edge
-
-    def corner(faces_idx, vertex):  # corner id 3*t + (position of vertex in face t)
-        return 3 * faces_idx + np.argmax(f[faces_idx] == vertex[:, None], axis=1)
-
-    links = []
-    for end in (0, 1):  # both end points of the shared edge
-        v = half_edges[h1, end]
-        links.append((corner(face_of[h1], v), corner(face_of[h2], v)))
-    rows = np.concatenate([r for r, _ in links])
-    cols = np.concatenate([c for _, c in links])
+    # Half-edge h = 3t + i runs from corner h (vertex f[t, i]) to corner nxt[h] of the same face.
+    start = f.ravel()
+    nxt = np.arange(3 * n_faces).reshape(-1, 3)[:, [1, 2, 0]].ravel()
+    end = start[nxt]
+    key = np.minimum(start, end) * mesh.n_vertices + np.maximum(start, end)
+    order = np.argsort(key, kind="stable")
+    same = key[order][1:] == key[order][:-1]
+    h1, h2 = order[:-1][same], order[1:][same]  # the two half-edges of each interior edge
+    # Link the corners of the two faces at each end point of their shared edge.
+    opposite = start[h1] == end[h2]  # the faces run the edge in opposite directions (usual case)
+    rows = np.concatenate([h1, nxt[h1]])
+    cols = np.concatenate([np.where(opposite, nxt[h2], h2), np.where(opposite, h2, nxt[h2])])
     graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(3 * n_faces, 3 * n_faces))
     _, fan = connected_components(graph, directed=False)
     fans = np.unique(f.ravel() * (3 * n_faces) + fan)  # distinct (vertex, fan) pairs
