@@ -121,6 +121,20 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench(args: argparse.Namespace) -> int:
+    from .bench import report_markdown, run_bench
+
+    result = run_bench(args.dataset, args.out, methods=args.method, pairs_file=args.pairs, threshold=args.threshold,
+                       config=_config(args), jobs=args.jobs, scheduler=args.scheduler, resume=args.resume,
+                       repair=args.repair, laplacian=args.laplacian, no_cache=args.no_cache,
+                       progress=not args.quiet)
+    if not args.quiet:
+        print(report_markdown(result.results))
+    print(f"darcyan: {result.computed} method x pair results computed, {result.reused} reused; "
+          f"{result.seconds:.0f} s; results in {result.out}", file=sys.stderr)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="darcyan",
@@ -160,6 +174,28 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Matches a built-in articulated figure against a bent copy with known "
                                    "ground truth and prints the matches and how many are correct.")
     p.set_defaults(func=cmd_demo)
+
+    from .bench import METHODS
+    from .evaluation import DEFAULT_THRESHOLD
+
+    p = sub.add_parser("bench", help="correspondence rates on a dataset folder, darcyan and baselines side by side",
+                       description="Match every ordered pair within each class of DATASET_DIR ({class}{pose}.off|ply|obj; "
+                                   "ground truth corres/{shape}.vts, else the identity on vertex indices) with each "
+                                   "method at darcyan's feature points, and write results.json, pairs.csv, "
+                                   "report.md, rates.png and curve.png to --out.")
+    p.add_argument("dataset", metavar="DATASET_DIR", help="folder of meshes named {class}{pose}")
+    p.add_argument("--pairs", metavar="FILE", help="tab-separated 'source<TAB>target' lines (default: every ordered pair within a class)")
+    p.add_argument("--method", nargs="+", choices=METHODS, default=["darcyan"], help="methods to evaluate (default darcyan)")
+    p.add_argument("--threshold", type=float, default=DEFAULT_THRESHOLD, help="a match is correct when its geodesic error / sqrt(area) is at most this (default %(default)s)")
+    p.add_argument("--out", default="bench-results", help="output folder (default %(default)s)")
+    p.add_argument("--jobs", type=int, default=1, help="local worker processes (default %(default)s)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="run on a dask.distributed scheduler (pip install 'darcyan[dask]')")
+    p.add_argument("--resume", action="store_true", help="keep the finished pairs in --out and compute only the others")
+    p.add_argument("--laplacian", choices=("cotangent", "robust"), default="cotangent", help="Laplace-Beltrami operator of hks/wks (default %(default)s)")
+    p.add_argument("--matching", choices=MATCHING_MODES, default=DarcyanConfig().matching, help="descriptor matching of darcyan/hks/wks (default %(default)s)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no table on stdout")
+    _add_config_options(p)
+    p.set_defaults(func=cmd_bench)
     return parser
 
 

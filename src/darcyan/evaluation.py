@@ -92,3 +92,227 @@ def cumulative_curve(errors: np.ndarray, taus: np.ndarray = CURVE_TAUS) -> np.nd
     if len(errors) == 0:
         return np.zeros(len(taus))
     return (errors[None, :] <= taus[:, None]).mean(axis=1)
+
+
+# ---------------------------------------------------------------------------------------------
+# Ground truth on meshes whose numbering differs from the file's (prepared meshes)
+
+
+def nearest_samples(solver: GeodesicSolver, vertices: np.ndarray, samples: np.ndarray) -> np.ndarray:
+    """``(k,)`` for each of ``vertices`` the position in ``samples`` of the geodesically nearest
+    sample; both given as vertex indices of the solver's mesh (one fast-marching field each)."""
+    samples = np.asarray(samples, dtype=np.int64)
+    out = np.empty(len(vertices), dtype=np.int64)
+    for i, p in enumerate(np.asarray(vertices, dtype=np.int64)):
+        out[i] = int(np.argmin(solver.distance(int(p))[samples]))
+    return out
+
+
+def input_to_mesh_index(mesh: Mesh, input_vertices: np.ndarray, input_positions: np.ndarray | None = None) -> np.ndarray:
+    """``(k,)`` indices into ``mesh`` of vertices given in the input file's numbering.
+
+    ``mesh.input_index`` maps each vertex of ``mesh`` to the file; a file vertex that preparation
+    left out (a small component, an unreferenced vertex) is sent to the mesh vertex nearest its
+    position ``input_positions[v]`` (``(n_input, 3)``, in ``mesh``'s coordinates), or refused
+    without positions.
+    """
+    input_vertices = np.asarray(input_vertices, dtype=np.int64)
+    size = int(max(mesh.input_index.max(initial=-1), input_vertices.max(initial=-1))) + 1
+    inverse = np.full(size, -1, dtype=np.int64)
+    inverse[mesh.input_index] = np.arange(mesh.n_vertices)
+    out = inverse[input_vertices]
+    missing = out < 0
+    if missing.any():
+        if input_positions is None:
+            raise MeshError(mesh.name, f"vertex {int(input_vertices[missing][0])} of the file is not on the prepared mesh")
+        from scipy.spatial import cKDTree
+
+        _, nearest = cKDTree(mesh.vertices).query(np.asarray(input_positions)[input_vertices[missing]])
+        out[missing] = nearest
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Scores of one pair and their aggregation
+
+
+@dataclass(frozen=True)
+class PairScore:
+    """The matches of one source shape to one target, scored.
+
+    Attributes:
+        features: source feature points considered.
+        errors: ``(k,)`` geodesic error of each match, sqrt(area) units (k = matches).
+        errors_sym: ``(k,)`` the same against the mirror ground truth (``NaN`` without one).
+        repeatable: ``(features,) bool``: some target feature point lies within the threshold of
+            the true correspondent of the source feature point (detection succeeded there).
+        repeatable_sym: the same for the mirror correspondent (or the strict one).
+    """
+
+    features: int
+    errors: np.ndarray
+    errors_sym: np.ndarray
+    repeatable: np.ndarray
+    repeatable_sym: np.ndarray
+
+
+def score_pair(target_solver: GeodesicSolver, matched: np.ndarray, truth: np.ndarray,
+               truth_sym: np.ndarray | None, target_features: np.ndarray, threshold: float = DEFAULT_THRESHOLD,
+               match_rows: np.ndarray | None = None, fields: dict | None = None) -> PairScore:
+    """Score matches on a target mesh of area 1 (all indices are vertices of the solver's mesh).
+
+    Args:
+        matched: ``(k,)`` target vertex of each match.
+        truth: ``(f,)`` true correspondent of each source feature point; ``truth_sym`` its mirror
+            image (``None``: no mirror ground truth).
+        target_features: ``(t,)`` the target's feature points (for repeatability).
+        match_rows: ``(k,)`` which source feature each match starts from (default: match i from
+            feature i).
+        fields: a dict reused across calls on the same target to keep distance fields.
+    """
+    fields = {} if fields is None else fields
+    scale = np.sqrt(target_solver.mesh.area())
+
+    def field(v: int) -> np.ndarray:
+        if v not in fields:
+            fields[v] = target_solver.distance(v) / scale
+        return fields[v]
+
+    matched = np.asarray(matched, dtype=np.int64)
+    truth = np.asarray(truth, dtype=np.int64)
+    rows = np.arange(len(matched)) if match_rows is None else np.asarray(match_rows, dtype=np.int64)
+    target_features = np.asarray(target_features, dtype=np.int64)
+    errors = np.array([field(int(truth[r]))[q] for r, q in zip(rows, matched)], dtype=np.float64)
+    repeatable = np.array([len(target_features) > 0 and field(int(t))[target_features].min() <= threshold
+                           for t in truth], dtype=bool)
+    if truth_sym is None:
+        errors_sym = np.full(len(matched), np.nan)
+        repeatable_sym = repeatable
+    else:
+        truth_sym = np.asarray(truth_sym, dtype=np.int64)
+        errors_sym = np.array([field(int(truth_sym[r]))[q] for r, q in zip(rows, matched)], dtype=np.float64)
+        repeatable_sym = repeatable | np.array(
+            [len(target_features) > 0 and field(int(t))[target_features].min() <= threshold for t in truth_sym],
+            dtype=bool)
+    return PairScore(len(truth), errors, errors_sym, repeatable, repeatable_sym)
+
+
+def flip_tolerant_errors(errors: np.ndarray, errors_sym: np.ndarray) -> np.ndarray:
+    """Per match the smaller of the strict and mirror errors (the strict one without mirror)."""
+    errors = np.asarray(errors, dtype=np.float64)
+    errors_sym = np.asarray(errors_sym, dtype=np.float64)
+    return np.where(np.isfinite(errors_sym), np.fmin(errors, errors_sym), errors)
+
+
+SUMMARY_KEYS = ("pairs", "features", "matches", "correct", "correct_sym", "rate", "rate_sym", "recall",
+                "recall_sym", "repeatability", "repeatability_sym", "mean_error")
+
+
+def summarize(scores: list, threshold: float = DEFAULT_THRESHOLD, taus: np.ndarray = CURVE_TAUS) -> dict:
+    """Pooled statistics of several :class:`PairScore` (or dicts with the same fields).
+
+    ``rate = correct / matches`` and ``rate_sym`` pool every match of the pairs given;
+    ``recall = correct / features`` counts per source feature point (lower than the rate when a
+    matcher leaves points unmatched);
+    ``repeatability`` pools their source feature points; ``curve``/``curve_sym`` are the shares of
+    matches with (flip-tolerant) error <= each of ``taus``. Rates of an empty set are ``None``.
+    """
+    def get(s, name):
+        return getattr(s, name) if not isinstance(s, dict) else s[name]
+
+    errors = np.concatenate([np.asarray(get(s, "errors"), dtype=np.float64) for s in scores]) if scores else np.zeros(0)
+    errors_sym = (np.concatenate([np.asarray(get(s, "errors_sym"), dtype=np.float64) for s in scores])
+                  if scores else np.zeros(0))
+    tolerant = flip_tolerant_errors(errors, errors_sym)
+    features = int(sum(int(get(s, "features")) for s in scores))
+    repeatable = int(sum(int(np.sum(get(s, "repeatable"))) for s in scores))
+    repeatable_sym = int(sum(int(np.sum(get(s, "repeatable_sym"))) for s in scores))
+    matches = len(errors)
+    correct = int((errors <= threshold).sum())
+    correct_sym = int((tolerant <= threshold).sum())
+
+    def share(a, b):
+        return a / b if b else None
+
+    return {
+        "pairs": len(scores), "features": features, "matches": matches, "correct": correct,
+        "correct_sym": correct_sym, "rate": share(correct, matches), "rate_sym": share(correct_sym, matches),
+        "recall": share(correct, features), "recall_sym": share(correct_sym, features),
+        "repeatability": share(repeatable, features), "repeatability_sym": share(repeatable_sym, features),
+        "mean_error": float(errors.mean()) if matches else None,
+        "curve": cumulative_curve(errors, taus).tolist(), "curve_sym": cumulative_curve(tolerant, taus).tolist(),
+    }
+
+
+# ---------------------------------------------------------------------------------------------
+# A mirror (left-right) map derived from the geometry, for data without .sym.vts
+
+MIRROR_ITERATIONS = 12  # plane refinements (reflect, nearest neighbours, refit)
+
+
+@dataclass(frozen=True)
+class MirrorMap:
+    """A reflective self-map of one mesh: ``vertices (n,)`` the mirror image of each vertex,
+    ``residual`` the mean distance from a reflected vertex to its image (sqrt(area) units; 0 for
+    an exactly symmetric mesh), ``normal (3,)`` and ``offset`` the plane ``normal . x = offset``."""
+
+    vertices: np.ndarray
+    residual: float
+    normal: np.ndarray
+    offset: float
+
+
+def reflection_symmetry(mesh: Mesh, iterations: int = MIRROR_ITERATIONS) -> MirrorMap:
+    """The mirror map of the best reflection plane of ``mesh``.
+
+    Each principal axis of the area-weighted vertex cloud starts a plane through the centroid; the
+    plane is refined by iterating: reflect the vertices, pair each with the nearest vertex to its
+    reflection, refit the normal as the principal direction of the pairs' differences and the
+    offset from their midpoints. The plane with the smallest residual wins. This is extrinsic:
+    it holds on a pose that is (nearly) symmetric, and for shapes sharing its vertex numbering.
+    """
+    from scipy.spatial import cKDTree
+
+    from .curvature import mixed_voronoi_area
+
+    scale = np.sqrt(mesh.area())
+    x = mesh.vertices / scale
+    w = mixed_voronoi_area(mesh) / scale**2
+    w = w / w.sum()
+    centre = w @ x
+    x = x - centre
+    tree = cKDTree(x)
+    _, axes = np.linalg.eigh((x * w[:, None]).T @ x)
+    best = None
+    for normal in axes.T:
+        offset = 0.0
+        for _ in range(iterations):
+            reflected = x - 2.0 * (x @ normal - offset)[:, None] * normal
+            dist, image = tree.query(reflected)
+            diff = x - x[image]
+            _, vecs = np.linalg.eigh((diff * w[:, None]).T @ diff)
+            new = vecs[:, -1] * (1.0 if vecs[:, -1] @ normal >= 0 else -1.0)
+            normal = new
+            offset = float(w @ ((x + x[image]) / 2.0 @ normal))
+        reflected = x - 2.0 * (x @ normal - offset)[:, None] * normal
+        dist, image = tree.query(reflected)
+        residual = float(w @ dist)
+        if best is None or residual < best.residual:
+            best = MirrorMap(np.asarray(image, dtype=np.int64), residual, normal.copy(),
+                             offset + float(normal @ centre))
+    return best
+
+
+def mirror_agreement(solver: GeodesicSolver, mirror: np.ndarray, samples: np.ndarray,
+                     sym_samples: np.ndarray) -> np.ndarray:
+    """``(k,)`` geodesic distance (sqrt(area) units) on the solver's mesh between the derived
+    mirror image ``mirror[samples[i]]`` and the listed one ``sym_samples[i]`` (``.sym.vts``),
+    to validate a derived mirror map."""
+    scale = np.sqrt(solver.mesh.area())
+    out = np.empty(len(samples))
+    fields: dict = {}
+    for i, (s, m) in enumerate(zip(samples, sym_samples)):
+        if int(m) not in fields:
+            fields[int(m)] = solver.distance(int(m))
+        out[i] = fields[int(m)][int(mirror[int(s)])] / scale
+    return out

@@ -1,0 +1,168 @@
+"""Baseline descriptors for the benchmark, evaluated at darcyan's own feature points.
+
+- ``hks``: the Heat Kernel Signature (Sun, Ovsjanikov and Guibas 2009),
+  ``HKS(x, t) = sum_i exp(-lambda_i t) phi_i(x)^2``, scaled by the heat trace
+  ``sum_i exp(-lambda_i t)`` at each time, at times log-spaced over
+  ``[4 ln 10 / lambda_max, 4 ln 10 / lambda_1]``.
+- ``wks``: the Wave Kernel Signature (Aubry, Schlickewei and Cremers 2011),
+  ``WKS(x, e) = sum_i phi_i(x)^2 exp(-(e - log lambda_i)^2 / 2 sigma^2)`` normalized by
+  ``sum_i exp(-(e - log lambda_i)^2 / 2 sigma^2)``, energies ``e`` evenly spaced in log-eigenvalue.
+
+Both come from the Laplace-Beltrami eigenbasis of the prepared mesh scaled to area 1
+(:func:`laplace_beltrami_spectrum`: cotangent stiffness with a lumped mixed-Voronoi mass, or
+``robust-laplacian``; generalized eigenproblem solved by ``scipy.sparse.linalg.eigsh`` in
+shift-invert mode), skipping the constant eigenfunction. They are matched by L2 exactly like
+darcyan's descriptor, so the benchmark compares descriptors, not set-ups.
+
+- ``pyfm``: the dense functional-map pipeline of PyPI's ``pyfmaps`` (optional extra ``[pyfm]``):
+  WKS descriptors, a functional map fitted with Laplacian and descriptor commutativity, refined
+  by ZoomOut, converted to a vertex-to-vertex map that is read at darcyan's source feature points.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from .errors import ConfigError, MeshError, require
+from .mesh import Mesh
+
+SPECTRUM_SIZE = 100  # eigenpairs (the constant one included) behind HKS and WKS
+SHIFT = -1e-3  # shift-invert target: just below 0, so the smallest eigenvalues converge first
+SIGNATURE_SAMPLES = 100  # times (HKS) or energies (WKS) per signature
+HKS_DECAY = 4.0 * np.log(10.0)  # t_min/t_max: exp(-lambda t) drops to 1e-4 at lambda_max/lambda_1
+WKS_VARIANCE = 7.0  # sigma = WKS_VARIANCE * energy step (Aubry et al.)
+WKS_MARGIN = 2.0  # energies start and stop this many sigmas inside the log-spectrum
+LAPLACIANS = ("cotangent", "robust")
+SPECTRAL_METHODS = ("hks", "wks")
+
+# pyfmaps pipeline (the parameters of the package's README example).
+PYFM_SPECTRUM = 128  # eigenpairs computed per mesh (pyfmaps' descriptors use up to 128)
+PYFM_DESCRIPTORS = 100  # WKS energies
+PYFM_DESCRIPTOR_STEP = 5  # keep every 5th WKS descriptor
+PYFM_K = 35  # initial functional map size
+PYFM_FIT = {"w_descr": 1.0, "w_lap": 1e-2, "w_dcomm": 1e-1, "w_orient": 0.0}
+PYFM_ZOOMOUT_STEPS = 15  # ZoomOut iterations, one eigenfunction each (35 -> 50)
+
+
+@dataclass(frozen=True)
+class Spectrum:
+    """Laplace-Beltrami eigenpairs: ``values (k,)`` ascending (the first ~0), ``vectors (n, k)``
+    mass-orthonormal, ``mass (n,)`` lumped vertex areas; for a mesh of area 1."""
+
+    values: np.ndarray
+    vectors: np.ndarray
+    mass: np.ndarray
+
+
+def laplacian_operators(mesh: Mesh, laplacian: str = "cotangent") -> tuple[sp.csr_matrix, np.ndarray]:
+    """``(stiffness (n, n) positive semidefinite, lumped mass (n,))`` of ``mesh``."""
+    if laplacian == "cotangent":
+        from .curvature import cotangent_laplacian, mixed_voronoi_area
+
+        return (-cotangent_laplacian(mesh)).tocsr(), mixed_voronoi_area(mesh)
+    if laplacian == "robust":
+        robust_laplacian = require("robust_laplacian", "bench")
+        stiffness, mass = robust_laplacian.mesh_laplacian(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+        return stiffness.tocsr(), np.asarray(mass.diagonal()).ravel()
+    raise ConfigError(f"laplacian must be one of {LAPLACIANS}, got {laplacian!r}")
+
+
+def laplace_beltrami_spectrum(mesh: Mesh, k: int = SPECTRUM_SIZE, laplacian: str = "cotangent") -> Spectrum:
+    """The ``k`` smallest eigenpairs of ``stiffness phi = lambda mass phi`` (shift-invert ``eigsh``).
+
+    Memory stays O(n k): one sparse factorization and the ``(n, k)`` eigenvectors.
+    """
+    from scipy.sparse.linalg import eigsh
+
+    stiffness, mass = laplacian_operators(mesh, laplacian)
+    k = min(k, mesh.n_vertices - 2)
+    if k < 3:
+        raise MeshError(mesh.name, "mesh too small for a Laplace-Beltrami spectrum")
+    mass = np.where(mass > 0, mass, mass[mass > 0].min(initial=1e-12))
+    try:
+        values, vectors = eigsh(stiffness, k=k, M=sp.diags(mass).tocsc(), sigma=SHIFT, which="LM")
+    except (RuntimeError, ValueError) as exc:
+        raise MeshError(mesh.name, f"Laplace-Beltrami eigenproblem failed ({exc})") from None
+    order = np.argsort(values)
+    return Spectrum(np.maximum(values[order], 0.0), vectors[:, order], mass)
+
+
+def _nonconstant(spectrum: Spectrum) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues and eigenvectors without the constant pair (and any other ~0 ones)."""
+    keep = spectrum.values > spectrum.values[-1] * 1e-9
+    keep[0] = False
+    return spectrum.values[keep], spectrum.vectors[:, keep]
+
+
+def heat_kernel_signature(spectrum: Spectrum, vertices: np.ndarray, samples: int = SIGNATURE_SAMPLES) -> np.ndarray:
+    """``(len(vertices), samples)`` scaled HKS at ``vertices`` (indices of the spectrum's mesh)."""
+    values, vectors = _nonconstant(spectrum)
+    times = np.geomspace(HKS_DECAY / values[-1], HKS_DECAY / values[0], samples)
+    decay = np.exp(-np.outer(values, times))  # (k, samples)
+    phi2 = vectors[np.asarray(vertices, dtype=np.int64)] ** 2  # (v, k)
+    return (phi2 @ decay) / decay.sum(axis=0)[None, :]
+
+
+def wave_kernel_signature(spectrum: Spectrum, vertices: np.ndarray, samples: int = SIGNATURE_SAMPLES) -> np.ndarray:
+    """``(len(vertices), samples)`` WKS at ``vertices`` (indices of the spectrum's mesh)."""
+    values, vectors = _nonconstant(spectrum)
+    log_values = np.log(values)
+    step = (log_values[-1] - log_values[0]) / samples
+    sigma = WKS_VARIANCE * step
+    energies = np.linspace(log_values[0] + WKS_MARGIN * sigma, log_values[-1] - WKS_MARGIN * sigma, samples)
+    weights = np.exp(-((energies[None, :] - log_values[:, None]) ** 2) / (2.0 * sigma**2))  # (k, samples)
+    phi2 = vectors[np.asarray(vertices, dtype=np.int64)] ** 2
+    return (phi2 @ weights) / weights.sum(axis=0)[None, :]
+
+
+def spectral_descriptors(method: str, spectrum: Spectrum, vertices: np.ndarray) -> np.ndarray:
+    """``hks`` or ``wks`` descriptors at ``vertices``."""
+    if method == "hks":
+        return heat_kernel_signature(spectrum, vertices)
+    if method == "wks":
+        return wave_kernel_signature(spectrum, vertices)
+    raise ConfigError(f"spectral descriptor must be one of {SPECTRAL_METHODS}, got {method!r}")
+
+
+# ---------------------------------------------------------------------------------------------
+# pyfmaps
+
+
+def pyfm_mesh(mesh: Mesh, spectrum: tuple | None = None):
+    """A ``pyFM.mesh.TriMesh`` of ``mesh`` with its operators; ``spectrum`` ``(values, vectors)``
+    from :func:`pyfm_spectrum` avoids recomputing the eigenpairs."""
+    trimesh_module = require("pyFM.mesh", "pyfm")
+    tri = trimesh_module.TriMesh(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    tri.compute_operators()
+    if spectrum is not None:
+        tri.eigenvalues = np.asarray(spectrum[0], dtype=np.float64)
+        tri.eigenvectors = np.asarray(spectrum[1], dtype=np.float64)
+    return tri
+
+
+def pyfm_spectrum(mesh: Mesh, k: int = PYFM_SPECTRUM) -> tuple[np.ndarray, np.ndarray]:
+    """``(values (k,), vectors (n, k))``: pyfmaps' own eigenpairs of ``mesh`` (for caching)."""
+    tri = pyfm_mesh(mesh)
+    tri.process(k=min(k, mesh.n_vertices - 2))
+    return np.asarray(tri.eigenvalues), np.asarray(tri.eigenvectors)
+
+
+def pyfm_point_map(source: Mesh, target: Mesh, source_spectrum: tuple | None = None,
+                   target_spectrum: tuple | None = None) -> np.ndarray:
+    """``(n_source,)`` the target vertex of every source vertex by pyfmaps' functional-map
+    pipeline (WKS descriptors, fitted map, ZoomOut); both meshes prepared and of area 1."""
+    functional = require("pyFM.functional", "pyfm")
+    spectral = require("pyFM.spectral", "pyfm")
+    # pyFM maps mesh2's vertices onto mesh1: mesh1 = target, mesh2 = source.
+    mesh1 = pyfm_mesh(target, target_spectrum)
+    mesh2 = pyfm_mesh(source, source_spectrum)
+    model = functional.FunctionalMapping(mesh1, mesh2)
+    model.preprocess(n_descr=PYFM_DESCRIPTORS, descr_type="WKS", subsample_step=PYFM_DESCRIPTOR_STEP,
+                     k_process=PYFM_SPECTRUM)
+    model.fit(K=(PYFM_K, PYFM_K), **PYFM_FIT)
+    refined = model.zoomout_refine(nit=PYFM_ZOOMOUT_STEPS, step=1)
+    # FunctionalMapping works on copies of the meshes: convert with its own (they hold the spectra).
+    return np.asarray(spectral.mesh_FM_to_p2p(refined, model.mesh1, model.mesh2), dtype=np.int64)

@@ -1,0 +1,1004 @@
+"""The evaluation harness behind ``darcyan bench``: correspondence rates on a folder of meshes.
+
+A dataset is a folder of meshes named ``{class}{pose}.off|.ply|.obj`` (the class is the name
+without its trailing digits). Ground truth comes from ``corres/{shape}.vts`` when that folder
+exists (line i of A.vts and B.vts are the same body point, 1-based; ``corres/{shape}.sym.vts``
+its mirror image), else it is the identity on vertex indices within a class (which needs equal
+vertex counts). Pairs are every ordered pair within a class, or the ``source<TAB>target`` lines
+of a pairs file.
+
+Every method is evaluated at darcyan's own feature points of the source shape, on the same
+targets and with the same metric (:mod:`darcyan.evaluation`), so the tables compare
+descriptors, not set-ups:
+
+- ``darcyan``: the Darcyan curvature descriptor, matched by :func:`darcyan.match_shapes` with
+  the run's configuration (``config.matching``);
+- ``hks`` / ``wks``: heat / wave kernel signatures (:mod:`darcyan.baselines`) at the same
+  feature points, matched by the same function (the descriptors swapped in);
+- ``pyfm``: pyfmaps' dense functional map read at the source feature points.
+
+The run has two phases, both parallel (``jobs`` local processes, or a ``dask.distributed``
+scheduler): per-shape work (description, spectra, nearest ground-truth samples, cached on disk
+by file content and parameters) and per-pair work (matching and scoring; all methods of a pair
+share the target's distance fields). Each finished pair is appended to ``pairs.jsonl`` in the
+output folder at once, and the summaries (``results.json``, ``pairs.csv``, ``report.md``) are
+rewritten as pairs finish, so an interrupted run loses nothing and ``resume`` skips what is done.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import re
+import sys
+import time
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .cache import ShapeCache, file_digest
+from .config import DarcyanConfig
+from .errors import DarcyanError, MeshError, require
+from .evaluation import (CURVE_TAUS, DEFAULT_THRESHOLD, input_to_mesh_index, mirror_agreement,
+                         nearest_samples, read_vts, reflection_symmetry, score_pair, summarize)
+
+METHODS = ("darcyan", "hks", "wks", "pyfm")
+MESH_SUFFIXES = (".off", ".ply", ".obj")
+TRUTH_FOLDER = "corres"
+BENCH_CACHE_FORMAT = "bench-1"  # bump when what the bench caches per shape changes
+MIRROR_MAX_RESIDUAL = 0.005  # a pose whose best reflection leaves more (sqrt(area) units) is not symmetric
+MIRROR_VALIDATION_SAMPLES = 200  # .sym.vts samples compared with a derived mirror map
+WRITE_INTERVAL = 2.0  # seconds between rewrites of the summaries while pairs finish
+PROGRESS_INTERVAL = 30.0  # seconds between progress lines when stderr is not a terminal
+PREPARED_MEMO = 3  # prepared meshes kept per worker process (tasks come grouped by target)
+RATE_DEFINITION = (
+    "rate = correct / matches, pooled over every match of the class's pairs (with nearest-descriptor "
+    "matching every source feature point gets one match); 'all' pools every match of the run; 'mean over classes' is the unweighted mean "
+    "of the class rates (the paper's Fig. 8 reports one rate per class). recall = correct / source "
+    "feature points: it differs from the rate only when a matcher leaves feature points unmatched.")
+
+JOURNAL = "pairs.jsonl"
+SETTINGS = "run.json"
+
+
+# ---------------------------------------------------------------------------------------------
+# Datasets and pairs
+
+
+def shape_class(name: str) -> str:
+    """The class of a shape: its name without trailing digits (``cat10`` -> ``cat``)."""
+    return re.sub(r"\d+$", "", name) or name
+
+
+def _pose_key(name: str):
+    match = re.search(r"(\d+)$", name)
+    return (shape_class(name), int(match.group(1)) if match else -1, name)
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """A folder of meshes: ``shapes`` name -> file, ``classes`` class -> names (by pose number),
+    ``truth`` ``"vts"`` (``corres/*.vts``) or ``"identity"``."""
+
+    root: Path
+    shapes: dict
+    classes: dict
+    truth: str
+
+    def vts(self, name: str, mirror: bool = False) -> Path:
+        return self.root / TRUTH_FOLDER / (f"{name}.sym.vts" if mirror else f"{name}.vts")
+
+
+def discover_dataset(root: str | os.PathLike) -> Dataset:
+    """Read a dataset folder (see the module docstring); clear errors for an unusable one."""
+    root = Path(root)
+    if not root.is_dir():
+        raise DarcyanError(f"{root}: not a folder")
+    shapes: dict = {}
+    for path in sorted(root.iterdir()):
+        if path.suffix.lower() not in MESH_SUFFIXES or not path.is_file():
+            continue
+        if path.stem in shapes:
+            raise DarcyanError(f"{root}: two meshes named {path.stem} ({shapes[path.stem].name}, {path.name})")
+        shapes[path.stem] = path
+    if not shapes:
+        raise DarcyanError(f"{root}: no meshes ({', '.join(MESH_SUFFIXES)}) in this folder")
+    names = sorted(shapes, key=_pose_key)
+    shapes = {n: shapes[n] for n in names}
+    classes: dict = {}
+    for n in names:
+        classes.setdefault(shape_class(n), []).append(n)
+    truth_dir = root / TRUTH_FOLDER
+    truth = "vts" if truth_dir.is_dir() and any(truth_dir.glob("*.vts")) else "identity"
+    if truth == "vts":
+        missing = [n for n in names if not (truth_dir / f"{n}.vts").is_file()]
+        if missing:
+            raise DarcyanError(f"{truth_dir / (missing[0] + '.vts')}: ground truth missing "
+                               f"({len(missing)} shape(s) without .vts)")
+    return Dataset(root, shapes, classes, truth)
+
+
+def default_pairs(dataset: Dataset) -> list:
+    """Every ordered pair of distinct shapes within each class."""
+    return [(a, b) for names in dataset.classes.values() for a in names for b in names if a != b]
+
+
+def read_pairs(path: str | os.PathLike, dataset: Dataset) -> list:
+    """``source<TAB>target`` lines (blank lines and ``#`` comments skipped; names with or
+    without the mesh suffix)."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise DarcyanError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    pairs = []
+    for number, line in enumerate(text.splitlines(), 1):
+        line = line.strip()
+        if not line or line.startswith("#"):
+            continue
+        parts = line.split("\t") if "\t" in line else line.split()
+        if len(parts) != 2:
+            raise DarcyanError(f"{path}: line {number}: expected 'source<TAB>target', got {line!r}")
+        names = []
+        for part in parts:
+            name = part.strip()
+            stem = Path(name).stem if Path(name).suffix.lower() in MESH_SUFFIXES else name
+            if stem not in dataset.shapes:
+                raise DarcyanError(f"{path}: line {number}: no mesh named {name!r} in {dataset.root}")
+            names.append(stem)
+        pairs.append(tuple(names))
+    if not pairs:
+        raise DarcyanError(f"{path}: no pairs in this file")
+    return pairs
+
+
+# ---------------------------------------------------------------------------------------------
+# Settings of a run
+
+
+@dataclass(frozen=True)
+class BenchSettings:
+    """What a run computes; results of runs with other settings are never mixed."""
+
+    methods: tuple
+    threshold: float = DEFAULT_THRESHOLD
+    config: DarcyanConfig = field(default_factory=DarcyanConfig)
+    laplacian: str = "cotangent"
+    repair: bool = False
+
+    def as_dict(self) -> dict:
+        from . import baselines
+
+        return {"methods": list(self.methods), "threshold": self.threshold, "config": self.config.as_dict(),
+                "laplacian": self.laplacian, "repair": self.repair,
+                "baselines": {"spectrum_size": baselines.SPECTRUM_SIZE,
+                              "signature_samples": baselines.SIGNATURE_SAMPLES,
+                              "pyfm_spectrum": baselines.PYFM_SPECTRUM, "pyfm_k": baselines.PYFM_K,
+                              "pyfm_zoomout_steps": baselines.PYFM_ZOOMOUT_STEPS}}
+
+    def comparable(self) -> dict:
+        """The settings that must match for resumed results to be reused (not the method list)."""
+        d = self.as_dict()
+        d.pop("methods")
+        return d
+
+
+# ---------------------------------------------------------------------------------------------
+# Per-shape work (runs in workers)
+
+
+@dataclass
+class _Prepared:
+    mesh: object  # prepared, normalized Mesh
+    positions: np.ndarray  # (n_input, 3) input vertices in the normalized frame
+    n_input: int
+    _solver: object = None
+
+    @property
+    def solver(self):
+        if self._solver is None:
+            from .geodesics import GeodesicSolver
+
+            self._solver = GeodesicSolver(self.mesh)
+        return self._solver
+
+    def index(self, input_vertices) -> np.ndarray:
+        return input_to_mesh_index(self.mesh, input_vertices, self.positions)
+
+
+_MEMO: OrderedDict = OrderedDict()
+
+
+def prepared_shape(path: str | os.PathLike, repair: bool = False) -> _Prepared:
+    """The mesh of ``path`` prepared and scaled to area 1, as :func:`darcyan.analyze_mesh`
+    sees it (memoized for the last few files of this process)."""
+    from .mesh import load_mesh, normalize_mesh, prepare_mesh
+
+    key = (str(path), repair)
+    if key in _MEMO:
+        _MEMO.move_to_end(key)
+        return _MEMO[key]
+    original = load_mesh(path)
+    prepared, _ = prepare_mesh(original, repair=repair)
+    mesh, norm = normalize_mesh(prepared)
+    item = _Prepared(mesh, (original.vertices - norm.centre) * norm.scale, original.n_vertices)
+    _MEMO[key] = item
+    while len(_MEMO) > PREPARED_MEMO:
+        _MEMO.popitem(last=False)
+    return item
+
+
+def _cache_of(task: dict) -> ShapeCache | None:
+    return None if task["no_cache"] else ShapeCache(task["cache_dir"])
+
+
+def _cached(cache: ShapeCache | None, key_parts: tuple, compute):
+    """``compute()`` (a dict of arrays) through ``cache``; returns (arrays, computed?)."""
+    if cache is not None:
+        key = cache.key(BENCH_CACHE_FORMAT, *key_parts)
+        stored = cache.load(key)
+        if stored is not None:
+            return stored, False
+    arrays = compute()
+    if cache is not None:
+        cache.save(key, arrays)
+    return arrays, True
+
+
+def _shape_task(task: dict) -> dict:
+    """Per-shape work; returns a small dict (or ``{"error": message}``)."""
+    try:
+        return _shape_work(task)
+    except DarcyanError as exc:  # sent back as text: the package's exceptions need not pickle
+        return {"error": str(exc), "name": task["name"]}
+
+
+def _shape_work(task: dict) -> dict:
+    from . import baselines
+    from .pipeline import describe_shape
+
+    settings: BenchSettings = task["settings"]
+    path, repair = Path(task["path"]), settings.repair
+    cache = _cache_of(task)
+    digest = file_digest(path)
+    seconds: dict = {}
+    start = time.perf_counter()
+    description = describe_shape(path, settings.config, repair, cache)
+    seconds["darcyan"] = time.perf_counter() - start
+    features = np.asarray(description.feature_vertices, dtype=np.int64)
+    record = {"name": task["name"], "n_input_vertices": int(description.n_input_vertices),
+              "features": features, "description": _light(description),
+              "descriptors": {"darcyan": description.descriptors}, "seconds": seconds}
+    feature_key = file_digest_bytes(features.tobytes())
+
+    spectral = [m for m in settings.methods if m in baselines.SPECTRAL_METHODS]
+    if spectral:
+        start = time.perf_counter()
+        spectrum_arrays, _ = _cached(
+            cache, (digest, "spectrum", settings.laplacian, str(baselines.SPECTRUM_SIZE), f"repair={repair}"),
+            lambda: _spectrum_arrays(prepared_shape(path, repair).mesh, settings.laplacian))
+        spectrum = baselines.Spectrum(spectrum_arrays["values"], spectrum_arrays["vectors"].astype(np.float64),
+                                      spectrum_arrays["mass"])
+        # Feature points lie on the prepared mesh: its input_index (cached with the spectrum) finds them.
+        inverse = np.full(description.n_input_vertices, -1, dtype=np.int64)
+        inverse[spectrum_arrays["input_index"]] = np.arange(len(spectrum_arrays["input_index"]))
+        at = inverse[features]
+        for method in spectral:
+            record["descriptors"][method] = baselines.spectral_descriptors(method, spectrum, at)
+            seconds[method] = time.perf_counter() - start
+    if "pyfm" in settings.methods and cache is not None:
+        start = time.perf_counter()
+        _cached(cache, (digest, "pyfm-spectrum", str(baselines.PYFM_SPECTRUM), f"repair={repair}"),
+                lambda: _pyfm_spectrum_arrays(prepared_shape(path, repair).mesh))
+        seconds["pyfm"] = time.perf_counter() - start
+    if task.get("vts"):
+        arrays, _ = _cached(
+            cache, (digest, "nearest-samples", file_digest(task["vts"]), feature_key, f"repair={repair}"),
+            lambda: {"nearest": _nearest_samples(path, repair, features, task["vts"], description.n_input_vertices)})
+        record["nearest_sample"] = arrays["nearest"]
+    return record
+
+
+INTERMEDIATES = ("mesh", "normalization", "curvatures", "agd", "features", "grids", "solver")
+
+
+def _light(description):
+    """The description without its intermediate results (small, and picklable for workers)."""
+    import dataclasses
+
+    names = {f.name for f in dataclasses.fields(description)}
+    return dataclasses.replace(description, **{k: None for k in INTERMEDIATES if k in names})
+
+
+def file_digest_bytes(data: bytes) -> str:
+    import hashlib
+
+    return hashlib.sha1(data).hexdigest()
+
+
+def _spectrum_arrays(mesh, laplacian: str) -> dict:
+    from . import baselines
+
+    s = baselines.laplace_beltrami_spectrum(mesh, laplacian=laplacian)
+    return {"values": s.values, "vectors": s.vectors.astype(np.float32), "mass": s.mass,
+            "input_index": mesh.input_index}
+
+
+def _pyfm_spectrum_arrays(mesh) -> dict:
+    from . import baselines
+
+    values, vectors = baselines.pyfm_spectrum(mesh)
+    return {"values": values, "vectors": vectors.astype(np.float32)}
+
+
+def _nearest_samples(path, repair, features, vts_path, n_input) -> np.ndarray:
+    shape = prepared_shape(path, repair)
+    samples = read_vts(vts_path, n_input)
+    return nearest_samples(shape.solver, shape.index(features), shape.index(samples))
+
+
+# ---------------------------------------------------------------------------------------------
+# Mirror ground truth for identity data, and its validation where .sym.vts exists
+
+
+def class_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: ShapeCache | None = None) -> dict:
+    """The mirror map of a class with identity ground truth.
+
+    All poses of such a class share one vertex numbering, so a mirror map found on one pose holds
+    for all: the poses are tried in pose order and the first whose best reflection plane leaves a
+    residual of at most ``MIRROR_MAX_RESIDUAL`` (a symmetric rest pose) gives the map
+    (:func:`darcyan.evaluation.reflection_symmetry`, in input numbering). Returns
+    ``{"shape", "residual", "vertices"}`` (``vertices`` ``None`` when no pose is symmetric: then
+    no symmetric flip is counted for this class).
+    """
+    best = {"shape": None, "residual": None, "vertices": None}
+    for name in dataset.classes[cls]:
+        path = dataset.shapes[name]
+        arrays, _ = _cached(cache, (file_digest(path), "mirror", f"repair={repair}"),
+                            lambda: _mirror_arrays(path, repair))
+        residual = float(arrays["residual"])
+        if best["residual"] is None or residual < best["residual"]:
+            best = {"shape": name, "residual": residual, "vertices": None}
+        if residual <= MIRROR_MAX_RESIDUAL:
+            best["vertices"] = arrays["vertices"]
+            break
+    return best
+
+
+def _mirror_arrays(path, repair) -> dict:
+    shape = prepared_shape(path, repair)
+    mirror = reflection_symmetry(shape.mesh)
+    vertices = np.full(shape.n_input, -1, dtype=np.int64)
+    vertices[shape.mesh.input_index] = shape.mesh.input_index[mirror.vertices]
+    missing = vertices < 0  # file vertices left out by preparation: the image of their nearest vertex
+    if missing.any():
+        vertices[missing] = shape.mesh.input_index[mirror.vertices[shape.index(np.flatnonzero(missing))]]
+    return {"vertices": vertices, "residual": np.array(mirror.residual)}
+
+
+def validate_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: ShapeCache | None = None,
+                    samples: int = MIRROR_VALIDATION_SAMPLES) -> dict | None:
+    """Check the derived mirror map against ``.sym.vts`` on a class of a vts dataset.
+
+    On the first pose of ``cls`` with a ``.sym.vts``: derive the mirror map as for identity data
+    and measure, at ``samples`` evenly spread lines of the ``.vts``, the geodesic distance
+    (sqrt(area) units) between the derived mirror image and the listed one. Returns
+    ``{"shape", "residual", "median_error", "within_threshold"}`` or ``None`` without ``.sym.vts``.
+    """
+    for name in dataset.classes[cls]:
+        sym = dataset.vts(name, mirror=True)
+        if not sym.is_file():
+            continue
+        path = dataset.shapes[name]
+        arrays, _ = _cached(cache, (file_digest(path), "mirror", f"repair={repair}"),
+                            lambda: _mirror_arrays(path, repair))
+        shape = prepared_shape(path, repair)
+        listed = read_vts(dataset.vts(name), shape.n_input)
+        listed_sym = read_vts(sym, shape.n_input)
+        pick = np.linspace(0, len(listed) - 1, min(samples, len(listed))).astype(np.int64)
+        errors = mirror_agreement(shape.solver, _prepared_mirror(shape, arrays["vertices"]),
+                                  shape.index(listed[pick]), shape.index(listed_sym[pick]))
+        return {"shape": name, "residual": float(arrays["residual"]), "median_error": float(np.median(errors)),
+                "within_threshold": float((errors <= DEFAULT_THRESHOLD).mean()), "samples": int(len(pick))}
+    return None
+
+
+def _prepared_mirror(shape: _Prepared, mirror_input: np.ndarray) -> np.ndarray:
+    """A mirror map in input numbering as a map between prepared-mesh vertices."""
+    return shape.index(mirror_input[shape.mesh.input_index])
+
+
+# ---------------------------------------------------------------------------------------------
+# Per-pair work (runs in workers)
+
+
+def _pair_task(job: dict) -> dict:
+    """Match and score one pair for its pending methods: ``{"records": [...]}`` or ``{"error"}``."""
+    try:
+        return {"records": _pair_work(job)}
+    except DarcyanError as exc:
+        return {"error": str(exc), "name": f"{job['source']} -> {job['target']}"}
+
+
+def _pair_work(job: dict) -> list:
+    from dataclasses import replace
+
+    from .pipeline import match_shapes
+
+    settings: BenchSettings = job["settings"]
+    src, tgt = job["source_rec"], job["target_rec"]
+    target = prepared_shape(job["target_path"], settings.repair)
+    features = np.asarray(src["features"], dtype=np.int64)
+    truth = job["truth"]
+    if truth["kind"] == "identity":
+        true_input = features
+        sym_input = None if truth["mirror"] is None else np.asarray(truth["mirror"])[features]
+    else:
+        nearest = np.asarray(src["nearest_sample"], dtype=np.int64)
+        true_input = read_vts(truth["target_vts"], target.n_input)[nearest]
+        sym_input = None if truth["target_sym"] is None else read_vts(truth["target_sym"], target.n_input)[nearest]
+    true_t = target.index(true_input)
+    sym_t = None if sym_input is None else target.index(sym_input)
+    target_features = target.index(tgt["features"])
+    fields: dict = {}
+    records = []
+    for method in job["methods"]:
+        start = time.perf_counter()
+        if method == "pyfm":
+            source = prepared_shape(job["source_path"], settings.repair)
+            point_map = _pyfm_map(job, source, target)
+            rows = np.arange(len(features))
+            matched = point_map[source.index(features)]
+            distance = np.full(len(rows), np.nan)
+        else:
+            # The same matcher as darcyan's (match_shapes with the run's config), other descriptors.
+            m = match_shapes(replace(src["description"], descriptors=src["descriptors"][method]),
+                             replace(tgt["description"], descriptors=tgt["descriptors"][method]),
+                             settings.config).matches_12
+            rows, matched, distance = m.source, target_features[m.target], m.distance
+        seconds = time.perf_counter() - start
+        score = score_pair(target.solver, matched, true_t, sym_t, target_features, settings.threshold,
+                           match_rows=rows, fields=fields)
+        records.append({
+            "method": method, "class": job["cls"], "source": job["source"], "target": job["target"],
+            "features": score.features, "matches": len(matched),
+            "correct": int((score.errors <= settings.threshold).sum()),
+            "source_vertex": features[rows].tolist(), "target_vertex": target.mesh.input_index[matched].tolist(),
+            "true_vertex": np.asarray(true_input)[rows].tolist(),
+            "descriptor_distance": _json_floats(distance), "errors": _json_floats(score.errors),
+            "errors_sym": _json_floats(score.errors_sym), "repeatable": score.repeatable.tolist(),
+            "repeatable_sym": score.repeatable_sym.tolist(), "seconds": seconds})
+    return records
+
+
+def _pyfm_map(job: dict, source: _Prepared, target: _Prepared) -> np.ndarray:
+    from . import baselines
+
+    cache = _cache_of(job)
+    spectra = []
+    for name, shape in ((job["source_path"], source), (job["target_path"], target)):
+        arrays, _ = _cached(cache, (file_digest(name), "pyfm-spectrum", str(baselines.PYFM_SPECTRUM),
+                                    f"repair={job['settings'].repair}"),
+                            lambda: _pyfm_spectrum_arrays(shape.mesh))
+        spectra.append((arrays["values"], arrays["vectors"]))
+    return baselines.pyfm_point_map(source.mesh, target.mesh, spectra[0], spectra[1])
+
+
+def _json_floats(values) -> list:
+    """Floats for JSON: NaN and infinities become ``None``."""
+    return [float(v) if np.isfinite(v) else None for v in np.asarray(values, dtype=np.float64)]
+
+
+def _array(values) -> np.ndarray:
+    return np.array([np.nan if v is None else v for v in values], dtype=np.float64)
+
+
+# ---------------------------------------------------------------------------------------------
+# Running tasks: inline, local processes, or a dask.distributed cluster
+
+
+def run_tasks(function, tasks: list, jobs: int = 1, scheduler: str | None = None):
+    """Yield ``function(task)`` for every task as each finishes (in any order).
+
+    ``scheduler``: the address of a ``dask.distributed`` scheduler (its workers need darcyan and
+    the dataset's files at the same paths); else ``jobs`` local processes (1: in this process).
+    """
+    if not tasks:
+        return
+    if scheduler:
+        distributed = require("distributed", "dask")
+        try:
+            client = distributed.Client(scheduler, timeout="30s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise DarcyanError(f"{scheduler}: cannot reach the dask scheduler ({exc})") from None
+        try:
+            futures = client.map(function, tasks, pure=False)
+            for future in distributed.as_completed(futures):
+                yield future.result()
+        finally:
+            client.close()
+        return
+    if jobs <= 1:
+        for task in tasks:
+            yield function(task)
+        return
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    saved = {k: os.environ.get(k) for k in THREAD_VARIABLES}
+    for k in THREAD_VARIABLES:  # one BLAS thread per worker: the workers already fill the cores
+        os.environ.setdefault(k, "1")
+    try:
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+            futures = [pool.submit(function, task) for task in tasks]
+            try:
+                for future in as_completed(futures):
+                    yield future.result()
+            finally:
+                for future in futures:
+                    future.cancel()
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+class Progress:
+    """A progress line on stderr: done / total, elapsed and estimated time left."""
+
+    def __init__(self, total: int, label: str, enabled: bool = True, stream=None):
+        self.total, self.label, self.enabled = total, label, enabled and total > 0
+        self.stream = stream or sys.stderr
+        self.done = 0
+        self.start = time.perf_counter()
+        self.last = 0.0
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+
+    def update(self, n: int = 1) -> None:
+        self.done += n
+        now = time.perf_counter()
+        if not self.enabled:
+            return
+        if self.tty or self.done == self.total or now - self.last >= PROGRESS_INTERVAL:
+            self.last = now
+            self.stream.write(("\r" if self.tty else "") + self.line(now) + ("" if self.tty else "\n"))
+            if self.tty and self.done == self.total:
+                self.stream.write("\n")
+            self.stream.flush()
+
+    def line(self, now: float | None = None) -> str:
+        now = time.perf_counter() if now is None else now
+        elapsed = now - self.start
+        width = 24
+        filled = int(width * self.done / self.total)
+        left = elapsed / self.done * (self.total - self.done) if self.done else float("nan")
+        return (f"{self.label} [{'#' * filled}{'.' * (width - filled)}] {self.done}/{self.total} "
+                f"{_clock(elapsed)} elapsed, {_clock(left)} left")
+
+
+def _clock(seconds: float) -> str:
+    if not np.isfinite(seconds):
+        return "?"
+    seconds = int(round(seconds))
+    return f"{seconds // 3600}:{seconds // 60 % 60:02d}:{seconds % 60:02d}"
+
+
+# ---------------------------------------------------------------------------------------------
+# The run
+
+
+@dataclass
+class BenchResult:
+    """What :func:`run_bench` did: ``results`` (the content of results.json), ``computed`` and
+    ``reused`` (method x pair results computed in this run / taken from an earlier one),
+    ``seconds`` (wall time of this run)."""
+
+    out: Path
+    results: dict
+    computed: int
+    reused: int
+    seconds: float
+
+
+def run_bench(dataset_dir: str | os.PathLike, out: str | os.PathLike, methods=("darcyan",),
+              pairs_file: str | os.PathLike | None = None, threshold: float = DEFAULT_THRESHOLD,
+              config: DarcyanConfig = DarcyanConfig(), jobs: int = 1, scheduler: str | None = None,
+              resume: bool = False, repair: bool = False, laplacian: str = "cotangent",
+              cache_dir: str | os.PathLike | None = None, no_cache: bool = False, plots: bool = True,
+              progress: bool = True) -> BenchResult:
+    """Benchmark ``methods`` on a dataset folder and write the results to ``out``.
+
+    Writes ``out/results.json``, ``pairs.csv``, ``report.md`` (as pairs finish), ``pairs.jsonl``
+    (one line per finished method x pair), ``run.json`` (the settings) and, with matplotlib,
+    ``rates.png`` and ``curve.png`` at the end. ``resume`` keeps the finished pairs of an earlier
+    run with the same settings and computes only the others.
+    """
+    from . import baselines
+
+    wall = time.perf_counter()
+    methods = tuple(dict.fromkeys(methods))
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown or not methods:
+        raise DarcyanError(f"method must be among {', '.join(METHODS)}, got {', '.join(unknown) or 'none'}")
+    if "pyfm" in methods:
+        require("pyFM", "pyfm")
+    if laplacian not in baselines.LAPLACIANS:
+        raise DarcyanError(f"laplacian must be one of {', '.join(baselines.LAPLACIANS)}, got {laplacian!r}")
+    if not 0 < threshold < 1:
+        raise DarcyanError(f"threshold must be in (0, 1) (sqrt(area) units), got {threshold}")
+    if jobs < 1:
+        raise DarcyanError(f"jobs must be at least 1, got {jobs}")
+    dataset = discover_dataset(dataset_dir)
+    pairs = read_pairs(pairs_file, dataset) if pairs_file else default_pairs(dataset)
+    if not pairs:
+        raise DarcyanError(f"{dataset.root}: no pairs (every class has a single shape)")
+    settings = BenchSettings(methods, float(threshold), config, laplacian, repair)
+    out = Path(out)
+    journal = _open_run(out, dataset, settings, resume)
+    pair_set = set(pairs)
+    done = {(r["method"], r["source"], r["target"]) for r in journal}
+    pending = [(s, t, [m for m in methods if (m, s, t) not in done]) for s, t in pairs]
+    pending = [(s, t, ms) for s, t, ms in pending if ms]
+    reused = sum(1 for r in journal if r["method"] in methods and (r["source"], r["target"]) in pair_set)
+    common = {"settings": settings, "cache_dir": None if cache_dir is None else str(cache_dir), "no_cache": no_cache}
+    cache = None if no_cache else ShapeCache(cache_dir)
+    info = _load_info(out)
+    info.setdefault("mirror", {})
+
+    # Phase 1: per-shape work.
+    names = sorted({n for s, t, _ in pending for n in (s, t)}, key=_pose_key)
+    shape_tasks = [dict(common, name=n, path=str(dataset.shapes[n]),
+                        vts=str(dataset.vts(n)) if dataset.truth == "vts" else None) for n in names]
+    shapes: dict = {}
+    bar = Progress(len(shape_tasks), "shapes", progress)
+    for rec in run_tasks(_shape_task, shape_tasks, jobs, scheduler):
+        if "error" in rec:
+            raise DarcyanError(rec["error"])
+        shapes[rec["name"]] = rec
+        bar.update()
+
+    # Ground truth: identity needs equal vertex counts; mirror maps per class.
+    classes = sorted({shape_class(s) for s, _, _ in pending})
+    for s, t, _ in pending:
+        if dataset.truth == "identity" and shapes[s]["n_input_vertices"] != shapes[t]["n_input_vertices"]:
+            raise DarcyanError(f"{dataset.shapes[s]} and {dataset.shapes[t]}: identity ground truth needs the same "
+                               f"vertex count ({shapes[s]['n_input_vertices']} vs {shapes[t]['n_input_vertices']}); "
+                               f"give {TRUTH_FOLDER}/*.vts files")
+    mirrors: dict = {}
+    for cls in classes:
+        if dataset.truth == "identity":
+            found = class_mirror(dataset, cls, repair, cache)
+            mirrors[cls] = found["vertices"]
+            info["mirror"][cls] = {"source": "derived reflection", "shape": found["shape"],
+                                   "residual": found["residual"], "used": found["vertices"] is not None}
+        else:
+            check = validate_mirror(dataset, cls, repair, cache)
+            info["mirror"][cls] = {"source": ".sym.vts", "validation_of_derived_map": check}
+    _save_json(out / SETTINGS, info)
+
+    # Phase 2: per-pair work, grouped by target so each worker reuses its prepared target.
+    pair_jobs = []
+    for s, t, ms in sorted(pending, key=lambda p: (_pose_key(p[1]), _pose_key(p[0]))):
+        if dataset.truth == "identity":
+            truth = {"kind": "identity", "mirror": mirrors.get(shape_class(s))}
+        else:
+            sym = dataset.vts(t, mirror=True)
+            truth = {"kind": "vts", "target_vts": str(dataset.vts(t)), "target_sym": str(sym) if sym.is_file() else None}
+        pair_jobs.append(dict(common, source=s, target=t, cls=shape_class(s), methods=ms,
+                              source_path=str(dataset.shapes[s]), target_path=str(dataset.shapes[t]),
+                              source_rec=_slim(shapes[s]), target_rec=_slim(shapes[t]), truth=truth))
+    computed = 0
+    bar = Progress(len(pair_jobs), "pairs", progress)
+    last_write = time.perf_counter()
+    results = None
+    try:
+        with open(out / JOURNAL, "a") as fh:
+            for answer in run_tasks(_pair_task, pair_jobs, jobs, scheduler):
+                if "error" in answer:
+                    raise DarcyanError(answer["error"])
+                for record in answer["records"]:
+                    fh.write(json.dumps(record) + "\n")
+                    journal.append(record)
+                    computed += 1
+                fh.flush()
+                os.fsync(fh.fileno())
+                bar.update()
+                if time.perf_counter() - last_write >= WRITE_INTERVAL:
+                    write_outputs(out, dataset, settings, info, journal, pairs, time.perf_counter() - wall)
+                    last_write = time.perf_counter()
+    finally:
+        results = write_outputs(out, dataset, settings, info, journal, pairs, time.perf_counter() - wall)
+    if plots:
+        write_plots(results, out)
+    return BenchResult(out, results, computed, reused, time.perf_counter() - wall)
+
+
+def _slim(shape: dict) -> dict:
+    """What a pair needs of a shape record."""
+    return {k: shape[k] for k in ("features", "description", "descriptors", "nearest_sample") if k in shape}
+
+
+def _open_run(out: Path, dataset: Dataset, settings: BenchSettings, resume: bool) -> list:
+    """Prepare the output folder; return the journal records to keep (resume) or none."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise DarcyanError(f"{out}: cannot create the output folder ({exc.strerror or exc})") from None
+    journal_path = out / JOURNAL
+    records: list = []
+    info = _load_info(out) if resume else {}
+    if resume and journal_path.exists():
+        before = info.get("settings")
+        if before is not None and (BenchSettings(**_settings_args(before)).comparable() != settings.comparable()
+                                   or info.get("dataset") != str(dataset.root.resolve())):
+            raise DarcyanError(f"{out}: the results there were made with other settings or another dataset; "
+                               f"use another --out, or run without --resume to start again")
+        text = journal_path.read_text()
+        if text and not text.endswith("\n"):  # a line cut by an interruption: drop it
+            text = text[: text.rfind("\n") + 1]
+            journal_path.write_text(text)
+        for line in text.splitlines():
+            try:
+                records.append(json.loads(line))
+            except json.JSONDecodeError:
+                continue
+        methods = tuple(dict.fromkeys(list(before["methods"] if before else []) + list(settings.methods)))
+    else:
+        if journal_path.exists():
+            journal_path.unlink()
+        methods = settings.methods
+    journal_path.touch()
+    stored = settings.as_dict()
+    stored["methods"] = list(methods)
+    info = {"dataset": str(dataset.root.resolve()), "ground_truth": dataset.truth, "settings": stored,
+            "mirror": info.get("mirror", {})}
+    _save_json(out / SETTINGS, info)
+    return records
+
+
+def _settings_args(stored: dict) -> dict:
+    return {"methods": tuple(stored["methods"]), "threshold": stored["threshold"],
+            "config": DarcyanConfig(**stored["config"]), "laplacian": stored["laplacian"], "repair": stored["repair"]}
+
+
+def _load_info(out: Path) -> dict:
+    try:
+        return json.loads((out / SETTINGS).read_text())
+    except (OSError, json.JSONDecodeError):
+        return {}
+
+
+def _save_json(path: Path, data) -> None:
+    _write_atomic(path, json.dumps(data, indent=1))
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise DarcyanError(f"{path}: cannot write ({exc.strerror or exc})") from None
+
+
+# ---------------------------------------------------------------------------------------------
+# Summaries: results.json, pairs.csv, report.md
+
+
+def summarize_records(records: list, threshold: float) -> dict:
+    """``{method: {"overall": {...}, "classes": {class: {...}}}}`` from pair records."""
+    by_method: dict = {}
+    for r in records:
+        by_method.setdefault(r["method"], []).append(r)
+    methods = {}
+    for method in [m for m in METHODS if m in by_method] + sorted(set(by_method) - set(METHODS)):
+        rows = by_method[method]
+        scores = [{"features": r["features"], "errors": _array(r["errors"]), "errors_sym": _array(r["errors_sym"]),
+                   "repeatable": r["repeatable"], "repeatable_sym": r["repeatable_sym"]} for r in rows]
+        classes = {}
+        for cls in sorted({r["class"] for r in rows}):
+            chosen = [s for s, r in zip(scores, rows) if r["class"] == cls]
+            classes[cls] = summarize(chosen, threshold)
+            classes[cls]["pair_seconds"] = float(sum(r["seconds"] for r in rows if r["class"] == cls))
+        overall = summarize(scores, threshold)
+        for key in ("rate", "rate_sym", "recall", "recall_sym", "repeatability"):
+            values = [c[key] for c in classes.values() if c[key] is not None]
+            overall[f"{key}_class_mean"] = float(np.mean(values)) if values else None
+        overall["pair_seconds"] = float(sum(r["seconds"] for r in rows))
+        methods[method] = {"overall": overall, "classes": classes}
+    return methods
+
+
+def write_outputs(out: Path, dataset: Dataset, settings: BenchSettings, info: dict, journal: list, pairs: list,
+                  wall_seconds: float) -> dict:
+    """Rewrite results.json, pairs.csv and report.md from the journal (the pairs of this run)."""
+    pair_set = set(pairs)
+    records = [r for r in journal if (r["source"], r["target"]) in pair_set]
+    order = {p: i for i, p in enumerate(pairs)}
+    method_order = {m: i for i, m in enumerate(METHODS)}
+    records.sort(key=lambda r: (method_order.get(r["method"], len(METHODS)), order[(r["source"], r["target"])]))
+    results = {
+        "dataset": str(dataset.root.resolve()), "ground_truth": dataset.truth, "threshold": settings.threshold,
+        "taus": CURVE_TAUS.tolist(), "settings": info.get("settings", settings.as_dict()),
+        "rate_definition": RATE_DEFINITION, "mirror": info.get("mirror", {}), "pairs_expected": len(pairs),
+        "wall_seconds": wall_seconds, "methods": summarize_records(records, settings.threshold), "pairs": records,
+    }
+    _write_atomic(out / "results.json", json.dumps(results, indent=None, separators=(",", ":")))
+    _write_atomic(out / "pairs.csv", pairs_csv(records, settings.threshold))
+    _write_atomic(out / "report.md", report_markdown(results))
+    return results
+
+
+PAIR_COLUMNS = ("method", "class", "source", "target", "features", "matches", "correct", "correct_sym",
+                "repeatable", "rate", "rate_sym", "mean_error", "seconds")
+
+
+def pairs_csv(records: list, threshold: float) -> str:
+    """One row per method x pair."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(PAIR_COLUMNS)
+    for r in records:
+        s = summarize([{"features": r["features"], "errors": _array(r["errors"]), "errors_sym": _array(r["errors_sym"]),
+                        "repeatable": r["repeatable"], "repeatable_sym": r["repeatable_sym"]}], threshold)
+        writer.writerow([r["method"], r["class"], r["source"], r["target"], r["features"], r["matches"], s["correct"],
+                         s["correct_sym"], int(np.sum(r["repeatable"])), _fmt(s["rate"]), _fmt(s["rate_sym"]),
+                         _fmt(s["mean_error"]), f"{r['seconds']:.3f}"])
+    return buffer.getvalue()
+
+
+def _fmt(value, digits: int = 3) -> str:
+    return "" if value is None else f"{value:.{digits}f}"
+
+
+def _pct(value) -> str:
+    return "–" if value is None else f"{100 * value:.0f}%"
+
+
+def report_markdown(results: dict) -> str:
+    """The tables of a run as Markdown."""
+    methods = results["methods"]
+    lines = [f"# darcyan bench: {Path(results['dataset']).name}", ""]
+    lines.append(f"Dataset `{results['dataset']}`, ground truth: "
+                 + ("`corres/*.vts` (p's true correspondent at the geodesically nearest listed sample)"
+                    if results["ground_truth"] == "vts" else "identity on vertex indices within a class")
+                 + f". Threshold {results['threshold']} (geodesic error / sqrt(target area)). "
+                 f"{sum(m['overall']['pairs'] for m in methods.values())} method x pair results of "
+                 f"{results['pairs_expected']} pairs x {len(methods)} method(s); wall time of the last run "
+                 f"{_clock(results['wall_seconds'])}.")
+    lines += ["", RATE_DEFINITION + " rate_sym also counts a match correct under the mirror ground truth "
+              "(a left-right flip); repeatability is the share of source feature points with some target "
+              "feature point within the threshold of their true correspondent (detection), whatever the "
+              "match (description).", ""]
+    if methods:
+        class_names = sorted({c for m in methods.values() for c in m["classes"]})
+        lines += ["## Side by side: strict rate / with symmetric flips / repeatability", ""]
+        lines.append("| class | " + " | ".join(methods) + " |")
+        lines.append("| --- |" + " --- |" * len(methods))
+        for cls in class_names:
+            cells = []
+            for m in methods.values():
+                c = m["classes"].get(cls)
+                cells.append("" if c is None else f"{_pct(c['rate'])} / {_pct(c['rate_sym'])} / {_pct(c['repeatability'])}")
+            lines.append(f"| {cls} | " + " | ".join(cells) + " |")
+        lines.append("| **mean over classes** | " + " | ".join(
+            f"{_pct(m['overall']['rate_class_mean'])} / {_pct(m['overall']['rate_sym_class_mean'])} / "
+            f"{_pct(m['overall']['repeatability_class_mean'])}" for m in methods.values()) + " |")
+        lines.append("| **all matches pooled** | " + " | ".join(
+            f"{_pct(m['overall']['rate'])} / {_pct(m['overall']['rate_sym'])} / {_pct(m['overall']['repeatability'])}"
+            for m in methods.values()) + " |")
+        for name, m in methods.items():
+            lines += ["", f"## {name}", "",
+                      "| class | pairs | features | matches | correct | rate | rate_sym | recall | recall_sym "
+                      "| repeatability | mean error | seconds |",
+                      "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+            for cls, c in list(m["classes"].items()) + [("**all**", m["overall"])]:
+                lines.append(f"| {cls} | {c['pairs']} | {c['features']} | {c['matches']} | {c['correct']} | "
+                             f"{_fmt(c['rate'])} | {_fmt(c['rate_sym'])} | {_fmt(c['recall'])} | "
+                             f"{_fmt(c['recall_sym'])} | {_fmt(c['repeatability'])} | "
+                             f"{_fmt(c['mean_error'])} | {c['pair_seconds']:.1f} |")
+            lines.append(f"\nMean over classes: rate {_fmt(m['overall']['rate_class_mean'])}, rate_sym "
+                         f"{_fmt(m['overall']['rate_sym_class_mean'])}, recall "
+                         f"{_fmt(m['overall']['recall_class_mean'])}, recall_sym "
+                         f"{_fmt(m['overall']['recall_sym_class_mean'])}, repeatability "
+                         f"{_fmt(m['overall']['repeatability_class_mean'])}. 'seconds' is the per-pair matching "
+                         f"time (for pyfm the whole functional-map pipeline; per-shape work is cached and not counted).")
+    mirror = results.get("mirror", {})
+    if mirror:
+        lines += ["", "## Mirror ground truth", ""]
+        if results["ground_truth"] == "identity":
+            lines.append(f"Derived per class from the first pose whose best reflection plane leaves a mean "
+                         f"residual <= {MIRROR_MAX_RESIDUAL} (sqrt(area) units); the map holds for every pose "
+                         f"of the class, which share one vertex numbering.")
+            lines += ["", "| class | pose | residual | used |", "| --- | --- | ---: | --- |"]
+            for cls, m in sorted(mirror.items()):
+                lines.append(f"| {cls} | {m['shape']} | {_fmt(m['residual'], 4)} | {'yes' if m['used'] else 'no (no symmetric pose: rate_sym = rate)'} |")
+        else:
+            lines.append("From `corres/*.sym.vts`. Check of the map darcyan derives for identity data (reflection "
+                         "of the first pose) against `.sym.vts`: geodesic distance between the derived and the "
+                         "listed mirror image at evenly spread samples.")
+            lines += ["", "| class | pose | residual | samples | median error | within threshold |",
+                      "| --- | --- | ---: | ---: | ---: | ---: |"]
+            for cls, m in sorted(mirror.items()):
+                v = m.get("validation_of_derived_map")
+                if v:
+                    lines.append(f"| {cls} | {v['shape']} | {_fmt(v['residual'], 4)} | {v['samples']} | "
+                                 f"{_fmt(v['median_error'], 4)} | {_pct(v['within_threshold'])} |")
+    return "\n".join(lines) + "\n"
+
+
+# ---------------------------------------------------------------------------------------------
+# Plots (matplotlib optional)
+
+
+def write_plots(results: dict, out: Path) -> list:
+    """rates.png and curve.png in ``out``; nothing (and a note on stderr) without matplotlib."""
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        print("darcyan: note: rates.png and curve.png need matplotlib: pip install 'darcyan[plot]'", file=sys.stderr)
+        return []
+    if not results["methods"]:
+        return []
+    return [plot_rates(results, out / "rates.png"), plot_curves(results, out / "curve.png")]
+
+
+def plot_rates(results: dict, path: Path) -> Path:
+    """Bars per class (and the mean over classes): strict rate solid, with symmetric flips
+    hatched on top, one colour per method (the paper's Fig. 8 side by side)."""
+    from . import style
+
+    methods = results["methods"]
+    classes = sorted({c for m in methods.values() for c in m["classes"]})
+    labels = classes + ["mean"]
+    width = 0.8 / len(methods)
+    with style.context():
+        fig, ax = style.figure((max(6.0, 1.1 * len(labels) + 2), 4.0))
+        for i, (name, m) in enumerate(methods.items()):
+            strict = [(m["classes"].get(c) or {}).get("rate") or 0.0 for c in classes] + [m["overall"]["rate_class_mean"] or 0.0]
+            sym = [(m["classes"].get(c) or {}).get("rate_sym") or 0.0 for c in classes] + [m["overall"]["rate_sym_class_mean"] or 0.0]
+            x = np.arange(len(labels)) - 0.4 + width * (i + 0.5)
+            colour = style.method_colour(name)
+            ax.bar(x, np.array(sym) * 100, width * 0.9, color="white", edgecolor=colour, hatch="///", linewidth=0.8,
+                   label=f"{name} (with flips)")
+            ax.bar(x, np.array(strict) * 100, width * 0.9, color=colour, label=f"{name}")
+        ax.set_xticks(np.arange(len(labels)), labels)
+        ax.set_ylim(0, 100)
+        ax.set_ylabel(f"correspondence rate (%), error <= {results['threshold']}")
+        ax.set_title(f"{Path(results['dataset']).name}: rate per class")
+        ax.legend(ncol=2, fontsize="small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        style.save(fig, path)
+    return path
+
+
+def plot_curves(results: dict, path: Path) -> Path:
+    """Cumulative curve per method: share of matches with error <= tau (solid strict, dashed
+    with symmetric flips)."""
+    from . import style
+
+    taus = np.asarray(results["taus"])
+    with style.context():
+        fig, ax = style.figure()
+        for name, m in results["methods"].items():
+            colour = style.method_colour(name)
+            ax.plot(taus, np.asarray(m["overall"]["curve"]) * 100, color=colour, label=name)
+            ax.plot(taus, np.asarray(m["overall"]["curve_sym"]) * 100, color=colour, linestyle="--",
+                    label=f"{name} (with flips)")
+        ax.axvline(results["threshold"], color=style.NEUTRAL["edge"], linewidth=0.8, linestyle=":")
+        ax.set_xlim(taus[0], taus[-1])
+        ax.set_ylim(0, 100)
+        ax.set_xlabel("geodesic error / sqrt(area)")
+        ax.set_ylabel("matches with error <= threshold (%)")
+        ax.set_title(f"{Path(results['dataset']).name}: cumulative error")
+        ax.legend(fontsize="small", loc="lower right")
+        style.save(fig, path)
+    return path
