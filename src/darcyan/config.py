@@ -35,6 +35,9 @@ class DarcyanConfig:
             averaged to approximate the Average Geodesic Distance (exact AGD would need V solves).
         agd_smoothing: length scale of a heat diffusion of the AGD field before its maxima are
             taken (0: the paper's plain AGD). Makes feature points repeat across poses.
+        proxy_vertices: the smooth global fields (AGD, the mirror test's signature) of meshes with
+            more than twice this many vertices are computed on a copy decimated to this many
+            vertices and interpolated back (0: always on the full mesh).
         extremity_radius: a feature point is a vertex whose AGD is the largest within this
             geodesic radius (greedy non-maximum suppression over one-ring maxima).
         min_agd_quantile: one-ring maxima whose AGD is below this quantile of the AGD over the
@@ -53,6 +56,7 @@ class DarcyanConfig:
     curvature_smoothing: int = 2
     agd_sources: int = 24
     agd_smoothing: float = 0.07
+    proxy_vertices: int = 6000
     extremity_radius: float = 0.25
     min_agd_quantile: float = 0.5
     max_features: int = 0
@@ -66,7 +70,7 @@ class DarcyanConfig:
                 raise ConfigError(f"config: {name} must be a positive integer, got {value!r}")
         if self.radial_lines < 3:
             raise ConfigError("config: radial_lines must be at least 3")
-        for name in ("curvature_smoothing", "max_features"):
+        for name in ("curvature_smoothing", "max_features", "proxy_vertices"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 0:
                 raise ConfigError(f"config: {name} must be a non-negative integer, got {value!r}")
@@ -93,6 +97,11 @@ class DarcyanConfig:
         values = self.as_dict()
         chosen = {k: values[k] for k in (fields or values)}
         return hashlib.sha1(json.dumps(chosen, sort_keys=True).encode()).hexdigest()[:16]
+
+    @classmethod
+    def paper(cls, **changes) -> "DarcyanConfig":
+        """The paper's method as published: plain AGD maxima, nearest-descriptor matching."""
+        return cls(agd_smoothing=0.0, extremity_radius=0.15, matching="nearest").replace(**changes)
 
     @property
     def level_radii(self) -> "list[float]":

@@ -20,7 +20,8 @@ from .mesh import Mesh
 
 @dataclass(frozen=True)
 class AGD:
-    """``values (n,)``: approximate AGD per vertex (mesh units); ``sources (s,)``: the sample."""
+    """``values (n,)``: approximate AGD per vertex (mesh units); ``sources (s,)``: the sample
+    (vertices of the mesh it was computed on, which may be a decimated proxy)."""
 
     values: np.ndarray
     sources: np.ndarray

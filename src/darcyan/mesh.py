@@ -754,6 +754,14 @@ def _submesh(mesh: Mesh, keep_faces: np.ndarray) -> Mesh:
 
 def _check_vertex_manifold(mesh: Mesh) -> None:
     """Refuse a vertex whose faces form more than one fan (a 'bow tie'): the solvers cannot."""
+    bad = nonmanifold_vertices(mesh)
+    if len(bad):
+        raise MeshError(mesh.name, f"{len(bad)} non-manifold vertices (faces meeting only at a "
+                                   f"vertex, first: {int(mesh.input_index[bad[0]])})")
+
+
+def nonmanifold_vertices(mesh: Mesh) -> np.ndarray:
+    """Vertices whose faces form more than one fan (edge-manifold input assumed)."""
     f = mesh.faces
     n_faces = len(f)
     # Half-edge h = 3t + i runs from corner h (vertex f[t, i]) to corner nxt[h] of the same face.
@@ -771,10 +779,7 @@ def _check_vertex_manifold(mesh: Mesh) -> None:
     graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(3 * n_faces, 3 * n_faces))
     _, fan = connected_components(graph, directed=False)
     fans = np.unique(f.ravel() * (3 * n_faces) + fan)  # distinct (vertex, fan) pairs
-    bad = np.flatnonzero(np.bincount(fans // (3 * n_faces), minlength=mesh.n_vertices) > 1)
-    if len(bad):
-        raise MeshError(mesh.name, f"{len(bad)} non-manifold vertices (faces meeting only at a "
-                                   f"vertex, first: {int(mesh.input_index[bad[0]])})")
+    return np.flatnonzero(np.bincount(fans // (3 * n_faces), minlength=mesh.n_vertices) > 1)
 
 
 def _consistently_oriented(faces: np.ndarray, n_vertices: int) -> bool:

@@ -25,6 +25,7 @@ from .geodesics import GeodesicSolver, vertex_normals
 from .symmetry import OrientedSurface, choose_orientation, curvature_signature
 from .grid import DarcyanGrid, darcyan_grids
 from .matching import Matches, consistent_candidates, match_descriptors
+from .proxy import coarse_proxy
 from .mesh import Mesh, Normalization, load_mesh, normalize_mesh, prepare_mesh
 
 
@@ -130,7 +131,12 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     curvatures = principal_curvatures(normalized, smoothing=config.curvature_smoothing)
     done("curvature")
     stage("agd")
-    agd = average_geodesic_distance(normalized, solver, config.agd_sources, config.agd_smoothing)
+    proxy = coarse_proxy(normalized, config.proxy_vertices)
+    if proxy is None:
+        agd = average_geodesic_distance(normalized, solver, config.agd_sources, config.agd_smoothing)
+    else:
+        coarse = average_geodesic_distance(proxy.mesh, proxy.solver, config.agd_sources, config.agd_smoothing)
+        agd = AGD(proxy.to_full(coarse.values), coarse.sources)
     done("agd")
     stage("features")
     distances: dict = {}
@@ -151,7 +157,7 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     surface = OrientedSurface(
         normalized.vertices.astype(np.float32), vertex_normals(normalized).astype(np.float32),
         np.array([distances[int(v)] for v in features.vertices], dtype=np.float32),
-        curvature_signature(normalized, curvatures.mean).astype(np.float32))
+        _signature(normalized, curvatures, proxy, config).astype(np.float32))
     done("layout")
     return ShapeDescription(
         name=mesh.name, n_input_vertices=n_input,
@@ -160,6 +166,14 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
         changes=changes, timings=timings, mesh=normalized,
         normalization=normalization, curvatures=curvatures, agd=agd, features=features, grids=grids,
         solver=solver)
+
+
+def _signature(mesh: Mesh, curvatures: Curvatures, proxy, config: DarcyanConfig) -> np.ndarray:
+    """The mirror test's point signature, on the coarse proxy when there is one."""
+    if proxy is None:
+        return curvature_signature(mesh, curvatures.mean)
+    coarse_mean = principal_curvatures(proxy.mesh, smoothing=config.curvature_smoothing).mean
+    return proxy.to_full(curvature_signature(proxy.mesh, coarse_mean))
 
 
 def feature_geodesics(vertices: np.ndarray, distances: dict) -> np.ndarray:
@@ -196,7 +210,8 @@ def describe_shape(source: str | os.PathLike | Mesh, config: DarcyanConfig = Dar
 
 # The parameters a shape description depends on (matching does not change it).
 DESCRIBE_FIELDS = ("levels", "radial_lines", "radius", "interpolation", "curvature_smoothing",
-                   "agd_sources", "agd_smoothing", "extremity_radius", "min_agd_quantile", "max_features")
+                   "agd_sources", "agd_smoothing", "extremity_radius", "min_agd_quantile", "max_features",
+                   "proxy_vertices")
 
 
 def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,

@@ -1,0 +1,76 @@
+"""A coarse stand-in of a large mesh for smooth, global fields.
+
+The Average Geodesic Distance and the diffused curvature signature vary slowly over the
+surface (they are smoothed over about 0.05-0.2 sqrt(area) on purpose), so computing them on a
+mesh decimated to a few thousand vertices and interpolating back loses nothing that matters and
+turns seconds into a fraction of one on 50k-vertex meshes. Everything local (curvature on the
+grid, level curves, radial geodesics, feature positions) stays on the full mesh.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .errors import DarcyanError
+from .geodesics import GeodesicSolver, interpolate
+from .mesh import Mesh, nonmanifold_vertices, prepare_mesh
+
+
+class CoarseProxy:
+    """A decimated copy of ``mesh`` and the map that carries its vertex fields back.
+
+    Args:
+        mesh: the full mesh (prepared).
+        vertices: target vertex count of the copy.
+
+    Attributes:
+        mesh: the decimated mesh (same length units), ``solver`` its geodesic solver.
+    """
+
+    def __init__(self, full: Mesh, vertices: int):
+        import fast_simplification
+
+        reduction = 1.0 - vertices / full.n_vertices
+        v, f = fast_simplification.simplify(full.vertices, full.faces, target_reduction=reduction)
+        f = np.asarray(f, dtype=np.int64)
+        for _ in range(CLEANUP_ROUNDS):  # dropping faces can leave new bow ties behind
+            f = _drop_nonmanifold_faces(f)
+            bow_ties = nonmanifold_vertices(Mesh(v, f))
+            if not len(bow_ties):
+                break
+            f = f[~np.isin(f, bow_ties).any(axis=1)]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a sliver component dropped by decimation is no news
+            self.mesh, _ = prepare_mesh(Mesh(v, f, name=f"{full.name} (decimated)"), repair=True)
+        self.solver = GeodesicSolver(self.mesh)
+        self._faces, self._bary = self.solver.locate(full.vertices)
+
+    def to_full(self, values: np.ndarray) -> np.ndarray:
+        """Per-vertex ``values`` of the copy ``(n_proxy, ...)`` interpolated at the full mesh's vertices."""
+        return interpolate(self.mesh, values, self._faces, self._bary)
+
+
+def _drop_nonmanifold_faces(faces: np.ndarray) -> np.ndarray:
+    """Decimation now and then folds a few faces onto one edge; the proxy can do without them."""
+    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    _, inverse, counts = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
+    bad_face = (counts[inverse.ravel()] > 2).reshape(-1, 3).any(axis=1)
+    return faces[~bad_face]
+
+
+def coarse_proxy(mesh: Mesh, vertices: int) -> CoarseProxy | None:
+    """A :class:`CoarseProxy` when ``mesh`` is much larger than ``vertices`` (and ``vertices`` > 0),
+    else ``None``: work on the mesh itself. Also ``None`` if decimation yields an unusable mesh."""
+    if vertices <= 0 or mesh.n_vertices < PROXY_MIN_RATIO * vertices:
+        return None
+    try:
+        return CoarseProxy(mesh, vertices)
+    except DarcyanError:
+        return None
+
+
+CLEANUP_ROUNDS = 5
+# Only meshes this many times larger than the proxy are decimated: below, it saves too little.
+PROXY_MIN_RATIO = 2.0

@@ -1,0 +1,32 @@
+"""The decimated proxy used for smooth global fields."""
+
+import numpy as np
+
+from darcyan import DarcyanConfig, analyze_mesh, synthetic
+from darcyan.features import average_geodesic_distance
+from darcyan.mesh import prepare_mesh
+from darcyan.proxy import coarse_proxy
+
+
+def test_proxy_agd_matches_the_exact_average_on_a_sphere(sphere):
+    mesh, _ = prepare_mesh(sphere)
+    proxy = coarse_proxy(mesh, 2000)
+    assert proxy is not None and proxy.mesh.n_vertices < 2500
+    agd = proxy.to_full(average_geodesic_distance(proxy.mesh, proxy.solver, 16).values)
+    assert agd.shape == (mesh.n_vertices,)
+    # pi r / 2 for r = 2; fast marching on the coarse copy overestimates by up to about 5%
+    np.testing.assert_allclose(agd, np.pi * 2.0 / 2, rtol=0.06)
+
+
+def test_small_meshes_get_no_proxy(sphere):
+    mesh, _ = prepare_mesh(sphere)
+    assert coarse_proxy(mesh, 6000) is None and coarse_proxy(mesh, 0) is None
+
+
+def test_features_with_proxy_are_the_figure_tips():
+    config = DarcyanConfig(proxy_vertices=2500)  # the 10k-vertex figure is decimated to 2.5k
+    shape = analyze_mesh(synthetic.figure(1), config)
+    tips = synthetic.figure_tips()
+    assert len(shape) == len(tips)
+    dist = np.array([shape.solver.distance(t)[shape.features.vertices] for t in tips])
+    assert (dist.min(axis=1) < 0.03).all()
