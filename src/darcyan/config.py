@@ -51,9 +51,9 @@ class DarcyanConfig:
 
     levels: int = 6
     radial_lines: int = 16
-    radius: float = 0.08
+    radius: float = 0.12
     interpolation: int = 2
-    curvature_smoothing: int = 2
+    curvature_smoothing: int = 4
     agd_sources: int = 24
     agd_smoothing: float = 0.07
     proxy_vertices: int = 6000
