@@ -70,12 +70,61 @@ def cmd_match(args: argparse.Namespace) -> int:
 
     config = _config(args)
     cache = _cache(args)
+    truth = None
+    if args.truth:
+        if not (args.plot or args.html):
+            raise DarcyanError("--truth marks wrong matches in the pictures: give --plot and/or --html too")
+        from .viz import read_truth
+
+        truth = read_truth(args.truth)
+    _picture_dependencies(args)
     shape_1 = describe_shape(args.source, config, args.repair, cache)
     _note_changes(shape_1)
     shape_2 = describe_shape(args.target, config, args.repair, cache)
     _note_changes(shape_2)
     correspondence = match_shapes(shape_1, shape_2, config)
     _write_text(correspondence.to_csv(), args.output)
+    if args.plot or args.html:
+        from .viz import match_scene
+
+        scene = match_scene(args.source, args.target, correspondence, truth, config, args.repair)
+        _pictures(scene, args.plot, args.html, "render_matches", "matches_html")
+    return 0
+
+
+def _picture_dependencies(args: argparse.Namespace) -> None:
+    """Fail before any computation when a requested picture's optional library is missing."""
+    from .errors import require
+
+    for target in (getattr(args, "plot", None), args.html, args.output if args.command == "show-grid" else None):
+        if target and not Path(target).resolve().parent.is_dir():
+            raise DarcyanError(f"{target}: cannot write (no such folder)")
+    if getattr(args, "plot", None) or (getattr(args, "output", None) and args.command == "show-grid"):
+        require("matplotlib", "plot")
+    if args.html:
+        require("plotly", "html")
+
+
+def _pictures(scene, png: str | None, html: str | None, render: str, page: str) -> None:
+    """Write the PNG and/or HTML picture of ``scene``; one line per file on stderr."""
+    from . import viewer, viz
+
+    if png:
+        picture = getattr(viz, render)(scene, png)
+        print(f"darcyan: wrote {picture.path} ({picture.seconds:.1f} s)", file=sys.stderr)
+    if html:
+        print(f"darcyan: wrote {getattr(viewer, page)(scene, html)}", file=sys.stderr)
+
+
+def cmd_show_grid(args: argparse.Namespace) -> int:
+    from .viz import grid_scene
+
+    if not args.output and not args.html:
+        raise DarcyanError("show-grid: give -o FILE.png and/or --html FILE.html")
+    _picture_dependencies(args)
+    scene = grid_scene(args.mesh, vertex=args.vertex, feature=args.feature, config=_config(args),
+                       curvature=args.curvature, repair=args.repair)
+    _pictures(scene, args.output, args.html, "render_grid", "grid_html")
     return 0
 
 
@@ -152,8 +201,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="CSV file to write (default: stdout)")
     p.add_argument("--matching", choices=MATCHING_MODES, default=DarcyanConfig().matching,
                    help="nearest: the paper's nearest descriptor; one-to-one: optimal assignment (default %(default)s)")
+    p.add_argument("--plot", metavar="FILE.png", help="also draw the matches side by side to a PNG (pip install 'darcyan[plot]')")
+    p.add_argument("--html", metavar="FILE.html", help="also write an interactive, self-contained HTML view (pip install 'darcyan[html]')")
+    p.add_argument("--truth", metavar="identity|A.vts,B.vts", help="ground truth for the pictures: mark wrong matches "
+                   "(geodesic error > 0.05 sqrt(area)); 'identity' = same vertex numbering")
     _add_config_options(p)
     p.set_defaults(func=cmd_match)
+
+    p = sub.add_parser("show-grid", help="draw the Darcyan grid around a point (PNG and/or interactive HTML)",
+                       description="Draws the surface around a feature point (default: feature 0) or a vertex, "
+                                   "the n geodesic level curves and m radial lines of its Darcyan grid, and the "
+                                   "intersection points coloured by curvature, seen from in front of the point.")
+    p.add_argument("mesh", help="mesh file (.off .obj .ply .vert/.tri)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--vertex", type=int, metavar="V", help="centre: vertex V of the file (0-based)")
+    where.add_argument("--feature", type=int, metavar="K", help="centre: feature point K (0-based row of 'darcyan features'; default 0)")
+    p.add_argument("--curvature", choices=("kmax", "kmin"), default="kmax", help="colour the points by (default %(default)s)")
+    p.add_argument("-o", "--output", metavar="FILE.png", help="PNG to write (pip install 'darcyan[plot]')")
+    p.add_argument("--html", metavar="FILE.html", help="interactive, self-contained HTML to write (pip install 'darcyan[html]')")
+    _add_config_options(p)
+    p.set_defaults(func=cmd_show_grid)
 
     p = sub.add_parser("features", help="list the feature points (AGD maxima) of a mesh",
                        description="Writes CSV vertex,agd: 0-based vertex index in the file, AGD in sqrt(area) units.")
