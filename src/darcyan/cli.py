@@ -22,27 +22,38 @@ from .mesh import MeshWarning
 EXIT_USAGE = 2
 
 
+# Help for each DarcyanConfig field that is a command-line option (``--name-with-dashes``).
+CONFIG_HELP = {
+    "levels": "n, geodesic level curves",
+    "radial_lines": "m, radial geodesic lines",
+    "radius": "R, radius of the outer level curve",
+    "interpolation": "samples per radial-line gap on each level curve (the paper's interpolation step)",
+    "curvature_smoothing": "one-ring smoothing iterations of the curvatures",
+    "agd_sources": "fast-marching sources approximating AGD",
+    "agd_smoothing": "heat-diffusion length applied to AGD before taking maxima, 0 = the paper's plain AGD",
+    "proxy_vertices": "AGD of larger meshes is computed on a copy decimated to this many vertices, 0 = never",
+    "extremity_radius": "AGD maxima are maxima within this geodesic radius",
+    "min_agd_quantile": "ignore AGD maxima below this quantile of AGD",
+    "max_features": "at most this many feature points, 0 = all",
+}
+
+
 def _add_config_options(parser: argparse.ArgumentParser) -> None:
     defaults = DarcyanConfig()
     group = parser.add_argument_group("method parameters (lengths in units of sqrt(surface area))")
-    group.add_argument("--levels", type=int, default=defaults.levels, help="n, geodesic level curves (default %(default)s)")
-    group.add_argument("--radial-lines", type=int, default=defaults.radial_lines, help="m, radial geodesic lines (default %(default)s)")
-    group.add_argument("--radius", type=float, default=defaults.radius, help="R, radius of the outer level curve (default %(default)s)")
-    group.add_argument("--interpolation", type=int, default=defaults.interpolation, help="samples per radial-line gap on each level curve (default %(default)s)")
-    group.add_argument("--curvature-smoothing", type=int, default=defaults.curvature_smoothing, help="one-ring smoothing iterations of the curvatures (default %(default)s)")
-    group.add_argument("--agd-sources", type=int, default=defaults.agd_sources, help="fast-marching sources approximating AGD (default %(default)s)")
-    group.add_argument("--extremity-radius", type=float, default=defaults.extremity_radius, help="AGD maxima are maxima within this geodesic radius (default %(default)s)")
-    group.add_argument("--max-features", type=int, default=defaults.max_features, help="at most this many feature points, 0 = all (default %(default)s)")
+    for name, text in CONFIG_HELP.items():
+        value = getattr(defaults, name)
+        group.add_argument(f"--{name.replace('_', '-')}", type=type(value), default=value,
+                           help=f"{text} (default %(default)s)")
     parser.add_argument("--repair", action="store_true", help="drop duplicate/degenerate faces and unreferenced vertices instead of refusing them")
     parser.add_argument("--no-cache", action="store_true", help="do not read or write the per-shape cache ($DARCYAN_CACHE)")
 
 
 def _config(args: argparse.Namespace) -> DarcyanConfig:
-    extra = {"matching": args.matching} if getattr(args, "matching", None) else {}
-    return DarcyanConfig(levels=args.levels, radial_lines=args.radial_lines, radius=args.radius,
-                         interpolation=args.interpolation, curvature_smoothing=args.curvature_smoothing,
-                         agd_sources=args.agd_sources, extremity_radius=args.extremity_radius,
-                         max_features=args.max_features, **extra)
+    values = {name: getattr(args, name) for name in CONFIG_HELP}
+    if getattr(args, "matching", None):
+        values["matching"] = args.matching
+    return DarcyanConfig(**values)
 
 
 def _cache(args: argparse.Namespace) -> ShapeCache | None:
