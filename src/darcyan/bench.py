@@ -738,7 +738,7 @@ def _open_run(out: Path, dataset: Dataset, settings: BenchSettings, resume: bool
     info = _load_info(out) if resume else {}
     if resume and journal_path.exists():
         before = info.get("settings")
-        if before is not None and (BenchSettings(**_settings_args(before)).comparable() != settings.comparable()
+        if before is not None and (_comparable(before) != settings.comparable()
                                    or info.get("dataset") != str(dataset.root.resolve())):
             raise DarcyanError(f"{out}: the results there were made with other settings or another dataset; "
                                f"use another --out, or run without --resume to start again")
@@ -765,9 +765,13 @@ def _open_run(out: Path, dataset: Dataset, settings: BenchSettings, resume: bool
     return records
 
 
-def _settings_args(stored: dict) -> dict:
-    return {"methods": tuple(stored["methods"]), "threshold": stored["threshold"],
-            "config": DarcyanConfig(**stored["config"]), "laplacian": stored["laplacian"], "repair": stored["repair"]}
+def _comparable(stored: dict) -> dict | None:
+    """The comparable settings of an earlier run (``None`` when they no longer make a config)."""
+    try:
+        return BenchSettings(tuple(stored["methods"]), stored["threshold"], DarcyanConfig(**stored["config"]),
+                             stored["laplacian"], stored["repair"]).comparable()
+    except (KeyError, TypeError, DarcyanError):
+        return None
 
 
 def _load_info(out: Path) -> dict:
