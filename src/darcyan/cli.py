@@ -80,7 +80,7 @@ def cmd_match(args: argparse.Namespace) -> int:
     from .pipeline import describe_shape, match_shapes
 
     config = _config(args)
-    cache = _cache(args)
+    cache = None if args.dense else _cache(args)  # a dense map needs the full descriptions
     truth = None
     if args.truth:
         if not (args.plot or args.html):
@@ -94,7 +94,17 @@ def cmd_match(args: argparse.Namespace) -> int:
     shape_2 = describe_shape(args.target, config, args.repair, cache)
     _note_changes(shape_2)
     correspondence = match_shapes(shape_1, shape_2, config)
-    _write_text(correspondence.to_csv(), args.output)
+    if args.dense:
+        from .dense import UNMAPPED, dense_map, dense_map_to_csv
+
+        result = dense_map(shape_1, shape_2, correspondence)
+        left_out = int((result.target == UNMAPPED).sum())
+        if left_out:
+            print(f"darcyan: warning: {args.source}: {left_out} vertices outside the matched component "
+                  f"are written with target_vertex {UNMAPPED}", file=sys.stderr)
+        _write_text(dense_map_to_csv(result.target), args.output)
+    else:
+        _write_text(correspondence.to_csv(), args.output)
     if args.plot or args.html:
         from .viz import match_scene
 
@@ -212,6 +222,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", help="CSV file to write (default: stdout)")
     p.add_argument("--matching", choices=MATCHING_MODES, default=DarcyanConfig().matching,
                    help="nearest: the paper's nearest descriptor; one-to-one: optimal assignment (default %(default)s)")
+    p.add_argument("--dense", action="store_true", help="write a dense map instead: CSV source_vertex,target_vertex, "
+                   "one row per source vertex, seeded by the feature matches (geodesic landmark coordinates refined by ZoomOut)")
     p.add_argument("--plot", metavar="FILE.png", help="also draw the matches side by side to a PNG (pip install 'darcyan[plot]')")
     p.add_argument("--html", metavar="FILE.html", help="also write an interactive, self-contained HTML view (pip install 'darcyan[html]')")
     p.add_argument("--truth", metavar="identity|A.vts,B.vts", help="ground truth for the pictures: mark wrong matches "

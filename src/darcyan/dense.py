@@ -1,0 +1,438 @@
+"""Dense correspondence: a target vertex for every source vertex, seeded by the sparse matches.
+
+The sparse matches (feature point -> feature point) become *landmarks*. Each vertex is described
+by its fast-marching geodesic distances to the k landmarks of its shape (an ``(n, k)`` embedding,
+O(V k) memory): a near-isometry keeps these coordinates, so the nearest vertex of the other shape
+in that space gives first maps in both directions. They are refined by a bijective ZoomOut (Melzi
+et al., *ZoomOut: Spectral Upsampling for Efficient Shape Correspondence*, 2019, with the
+bijectivity and orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*,
+2021) on a Laplace-Beltrami basis (cotangent stiffness, mixed Voronoi mass,
+``scipy.sparse.linalg.eigsh``), iterated on random surface samples; the final map is computed
+for every source vertex. Plain ZoomOut drifts on the less isometric TOSCA pairs (cat); the
+bijectivity term holds it.
+
+Sparse matches may be wrong (symmetric flips, wrong extremities): by default only the largest
+set of matches whose pairwise geodesic distances agree on both shapes is used (see
+:func:`consistent_landmarks`).
+
+Memory stays O(V): the functional maps are k x k, nearest neighbours are searched with a k-d
+tree (few dimensions) or by chunks of source rows (spectral dimensions).
+
+:func:`evaluate_dense` scores a dense map against ground truth on a fixed random sample of
+source vertices with the standard geodesic error (see :mod:`darcyan.evaluation`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as sla
+from scipy.spatial import cKDTree
+
+from .curvature import cotangent_laplacian, mixed_voronoi_area
+from .errors import ConfigError, DarcyanError
+from .evaluation import DEFAULT_THRESHOLD, GroundTruth, cumulative_curve, geodesic_errors
+from .geodesics import GeodesicSolver
+from .mesh import Mesh
+
+LANDMARK_MODES = ("consistent", "all")
+UNMAPPED = -1  # source vertices the analysis left out (outside the largest component)
+# Nearest-neighbour search: a k-d tree up to this dimension, chunked brute force above it.
+KDTREE_MAX_DIM = 16
+NN_CHUNK_BYTES = 128 * 2**20
+# Shift of the shift-invert eigen solver (just below the zero eigenvalue of the Laplacian).
+EIGSH_SHIFT = -1e-8
+DENSE_SAMPLE = 1000  # source vertices scored by evaluate_dense
+MIN_LANDMARKS = 3
+# Consistent landmark sets: exact maximum-clique search up to this many matches, greedy above.
+MAX_EXHAUSTIVE_LANDMARKS = 24
+# Weight of the (normalized) descriptor distances when breaking ties between landmark sets.
+TIE_BREAK_WEIGHT = 1e-3
+
+
+@dataclass(frozen=True)
+class DenseConfig:
+    """Parameters of :func:`dense_map`.
+
+    Attributes:
+        landmarks: ``"consistent"``: keep the largest set of matches whose pairwise geodesic
+            distances agree on both shapes (see ``consistency``); ``"all"``: every match.
+        consistency: two matches agree when their geodesic distances on the two shapes differ by
+            at most this fraction of the larger one (plus ``consistency_floor``).
+        consistency_floor: absolute slack of that test, in sqrt(area) units.
+        basis_start: size of the first functional map of ZoomOut.
+        basis_size: size of the last one (Laplace-Beltrami eigenfunctions computed per shape).
+        basis_step: growth of the basis per ZoomOut iteration.
+        zoomout_samples: ZoomOut iterates on this many random surface samples of each shape
+            (0 = on all vertices); the final map is always computed for every source vertex.
+        bijectivity, orthogonality: weights of the bijectivity (``C_12 C_21 ~ I``) and
+            orthogonality (area preservation) terms beside the coupling term in ZoomOut's
+            nearest-neighbour searches (0 and 0 = plain ZoomOut).
+    """
+
+    landmarks: str = "consistent"
+    consistency: float = 0.3
+    consistency_floor: float = 0.02
+    basis_start: int = 10
+    basis_size: int = 100
+    basis_step: int = 4
+    zoomout_samples: int = 3000
+    bijectivity: float = 1.0
+    orthogonality: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.landmarks not in LANDMARK_MODES:
+            raise ConfigError(f"dense: landmarks must be one of {LANDMARK_MODES}, got {self.landmarks!r}")
+        for name in ("basis_start", "basis_size", "basis_step"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < 1:
+                raise ConfigError(f"dense: {name} must be a positive integer, got {value!r}")
+        if self.basis_start > self.basis_size:
+            raise ConfigError(f"dense: basis_start ({self.basis_start}) exceeds basis_size ({self.basis_size})")
+        if not isinstance(self.zoomout_samples, int) or self.zoomout_samples < 0:
+            raise ConfigError(f"dense: zoomout_samples must be a non-negative integer, got {self.zoomout_samples!r}")
+        for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and value >= 0):
+                raise ConfigError(f"dense: {name} must be non-negative, got {value!r}")
+
+
+@dataclass
+class DenseMap:
+    """A dense map and how it was made.
+
+    Attributes:
+        target: ``(n1,) int64``, for each source vertex (input numbering) a target vertex (input
+            numbering), :data:`UNMAPPED` for source vertices outside the analysed mesh.
+        landmarks: ``(k, 2) int64`` (source, target) landmark pairs used, input numbering.
+        timings: seconds per stage.
+    """
+
+    target: np.ndarray
+    landmarks: np.ndarray
+    timings: dict = field(default_factory=dict)
+
+
+# ----------------------------------------------------------------------------------------------
+# Landmarks
+
+
+def _to_local(mesh: Mesh, input_vertices: np.ndarray) -> np.ndarray:
+    """Indices of ``mesh`` of vertices given in input numbering (-1 when left out)."""
+    lookup = np.full(int(mesh.input_index.max()) + 1, -1, dtype=np.int64)
+    lookup[mesh.input_index] = np.arange(mesh.n_vertices)
+    input_vertices = np.asarray(input_vertices, dtype=np.int64)
+    inside = (input_vertices >= 0) & (input_vertices < len(lookup))
+    out = np.full(len(input_vertices), -1, dtype=np.int64)
+    out[inside] = lookup[input_vertices[inside]]
+    return out
+
+
+def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float, floor: float,
+                         cost: np.ndarray | None = None) -> np.ndarray:
+    """The largest set of matches whose pairwise geodesic distances agree on both shapes.
+
+    Args:
+        dist_1, dist_2: ``(k, k)`` geodesic distances between the matched points on each shape
+            (match i is source point i -> target point i), sqrt(area) units.
+        relative, floor: matches i, j agree when ``|dist_1[i,j] - dist_2[i,j]| <= relative *
+            max(dist_1[i,j], dist_2[i,j]) + floor``.
+        cost: ``(k,)`` tie-break among sets of equal size (e.g. descriptor distances): the set
+            with the least total distortion plus cost wins.
+
+    Returns:
+        ``(m,) int64`` indices of the kept matches: a maximum clique of the agreement graph
+        (exhaustive search up to :data:`MAX_EXHAUSTIVE_LANDMARKS` matches; above, the match
+        with the most disagreements is dropped until all agree).
+    """
+    k = len(dist_1)
+    if k == 0:
+        return np.zeros(0, np.int64)
+    distortion = np.abs(dist_1 - dist_2)
+    agree = distortion <= relative * np.maximum(dist_1, dist_2) + floor
+    np.fill_diagonal(agree, True)
+    if k > MAX_EXHAUSTIVE_LANDMARKS:
+        kept = np.arange(k)
+        while not agree[np.ix_(kept, kept)].all():
+            kept = np.delete(kept, np.argmax((~agree[np.ix_(kept, kept)]).sum(axis=1)))
+        return kept.astype(np.int64)
+    cost = np.zeros(k) if cost is None else np.asarray(cost, dtype=np.float64)
+    best: list = [[], np.inf]
+
+    def score(members):
+        idx = np.array(members)
+        return distortion[np.ix_(idx, idx)].sum() / 2 + cost[idx].sum()
+
+    def grow(members, candidates):
+        if len(members) + len(candidates) < len(best[0]):
+            return
+        if not candidates:
+            if len(members) > len(best[0]) or (len(members) == len(best[0]) and score(members) < best[1]):
+                best[0], best[1] = list(members), score(members)
+            return
+        first, rest = candidates[0], candidates[1:]
+        grow(members + [first], [c for c in rest if agree[first, c]])
+        grow(members, rest)
+
+    grow([], list(range(k)))
+    return np.array(sorted(best[0]), dtype=np.int64)
+
+
+# ----------------------------------------------------------------------------------------------
+# Spectral basis and nearest neighbours
+
+
+def laplace_beltrami_basis(mesh: Mesh, size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The first ``size`` eigenpairs of the cotangent Laplace-Beltrami operator.
+
+    Returns ``eigenvalues (size,)``, ``eigenvectors (n, size)`` orthonormal for the mass, and the
+    lumped mass ``(n,)`` (Meyer's mixed Voronoi areas).
+    """
+    size = min(size, mesh.n_vertices - 1)
+    stiffness = (-cotangent_laplacian(mesh)).tocsc()
+    mass = mixed_voronoi_area(mesh)
+    try:
+        values, vectors = sla.eigsh(stiffness, k=size, M=sp.diags(mass).tocsc(), sigma=EIGSH_SHIFT, which="LM")
+    except (RuntimeError, sla.ArpackError) as exc:
+        raise DarcyanError(f"{mesh.name}: Laplace-Beltrami eigenproblem failed ({exc})") from None
+    order = np.argsort(values)
+    return values[order], vectors[:, order], mass
+
+
+def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """``(q,) int64``: for each row of ``queries (q, d)``, the nearest row of ``reference (n, d)``.
+
+    A k-d tree in few dimensions; in many, brute force in single precision by chunks of queries
+    (memory ``chunk x n``, never ``q x n``).
+    """
+    reference = np.ascontiguousarray(reference, dtype=np.float64)
+    queries = np.ascontiguousarray(queries, dtype=np.float64)
+    if reference.shape[1] <= KDTREE_MAX_DIM:
+        return cKDTree(reference).query(queries)[1].astype(np.int64)
+    reference, queries = reference.astype(np.float32), queries.astype(np.float32)
+    ref_sq = np.einsum("ij,ij->i", reference, reference)
+    chunk = max(1, NN_CHUNK_BYTES // (4 * len(reference)))
+    out = np.empty(len(queries), dtype=np.int64)
+    for start in range(0, len(queries), chunk):
+        q = queries[start:start + chunk]
+        out[start:start + chunk] = np.argmin(ref_sq[None, :] - 2.0 * (q @ reference.T), axis=1)
+    return out
+
+
+def surface_sample(mesh: Mesh, count: int, seed: int = 0) -> np.ndarray:
+    """``(count,)`` distinct vertices drawn at random with probability proportional to their
+    area (a uniform sample of the surface; ``numpy.random.default_rng(seed)``), sorted."""
+    if count >= mesh.n_vertices:
+        return np.arange(mesh.n_vertices)
+    weights = np.bincount(mesh.faces.ravel(), weights=np.repeat(mesh.face_areas(), 3), minlength=mesh.n_vertices)
+    weights = weights / weights.sum()
+    return np.sort(np.random.default_rng(seed).choice(mesh.n_vertices, size=count, replace=False, p=weights))
+
+
+# ----------------------------------------------------------------------------------------------
+# The dense map
+
+
+def _landmark_pairs(shape_1, shape_2, correspondence, config: DenseConfig):
+    """Landmark pairs in local numbering and their distance fields ``(n, k)`` on both shapes."""
+    src = _to_local(shape_1.mesh, correspondence.source_vertex)
+    tgt = _to_local(shape_2.mesh, correspondence.target_vertex)
+    cost = np.asarray(getattr(correspondence, "distance", np.zeros(len(src))), dtype=np.float64)
+    ok = (src >= 0) & (tgt >= 0)
+    src, tgt, cost = src[ok], tgt[ok], cost[ok]
+    fields_1 = np.stack([shape_1.solver.distance(int(v)) for v in src], axis=1) if len(src) else np.zeros((shape_1.mesh.n_vertices, 0))
+    fields_2 = np.stack([shape_2.solver.distance(int(v)) for v in tgt], axis=1) if len(tgt) else np.zeros((shape_2.mesh.n_vertices, 0))
+    if config.landmarks == "consistent" and len(src):
+        finite = np.where(np.isfinite(cost), cost, 0.0)
+        scale = finite.max() if finite.max() > 0 else 1.0
+        keep = consistent_landmarks(fields_1[src], fields_2[tgt], config.consistency, config.consistency_floor,
+                                    cost=finite / scale * TIE_BREAK_WEIGHT)
+        src, tgt, fields_1, fields_2 = src[keep], tgt[keep], fields_1[:, keep], fields_2[:, keep]
+    return src, tgt, fields_1, fields_2
+
+
+def _fit_map(basis_from: np.ndarray, basis_to_mapped: np.ndarray) -> np.ndarray:
+    """``(k, k)`` least-squares ``C`` with ``basis_from @ C ~ basis_to_mapped`` (both ``(s, k)``)."""
+    return np.linalg.lstsq(basis_from, basis_to_mapped, rcond=None)[0]
+
+
+def _embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.ndarray,
+                config: "DenseConfig") -> tuple[np.ndarray, np.ndarray]:
+    """Query rows on shape a and reference rows on shape b whose nearest neighbours give the map
+    a -> b minimizing coupling, bijectivity and orthogonality residuals.
+
+    ``c_ab (k, k)`` pulls b's coefficients back to a (``b_a C_ab ~ b_b[map]``), ``c_ba`` the
+    reverse. Coupling: ``b_b[j] ~ b_a[i] C_ab``; bijectivity (``C_ab C_ba ~ I``):
+    ``b_b[j] C_ba ~ b_a[i]``; orthogonality (``C_ab C_ab^T ~ I``): ``b_b[j] C_ab^T ~ b_a[i]``.
+    """
+    queries, references = [b_a @ c_ab], [b_b]
+    if config.bijectivity > 0:
+        queries.append(config.bijectivity * b_a)
+        references.append(config.bijectivity * (b_b @ c_ba))
+    if config.orthogonality > 0:
+        queries.append(config.orthogonality * b_a)
+        references.append(config.orthogonality * (b_b @ c_ab.T))
+    return np.hstack(queries), np.hstack(references)
+
+
+def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21: np.ndarray,
+            config: "DenseConfig") -> tuple[np.ndarray, np.ndarray]:
+    """Bijective ZoomOut on (sampled) vertices.
+
+    ``basis_i (s_i, K)``: Laplace-Beltrami eigenfunctions at the vertices taking part;
+    ``map_12 (s_1,)`` indices of rows of ``basis_2`` (the current map 1 -> 2) and ``map_21
+    (s_2,)`` the reverse. For k from ``config.basis_start`` to ``config.basis_size`` by
+    ``config.basis_step``: fit the k x k functional maps of both directions to the current
+    vertex maps (least squares), then update both vertex maps by nearest neighbours of the
+    embeddings of :func:`_embeddings` (ZoomOut, Melzi et al. 2019, with the bijectivity and
+    orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*, 2021).
+
+    Returns ``c_12, c_21`` (``(k, k)``, the last size): ``basis_1 @ c_12 ~ basis_2[map_12]``.
+    """
+    largest = min(config.basis_size, basis_1.shape[1], basis_2.shape[1])
+    sizes = list(range(min(config.basis_start, largest), largest + 1, config.basis_step))
+    if sizes[-1] != largest:
+        sizes.append(largest)
+    for i, k in enumerate(sizes):
+        b1, b2 = basis_1[:, :k], basis_2[:, :k]
+        c_12, c_21 = _fit_map(b1, b2[map_12]), _fit_map(b2, b1[map_21])
+        if i < len(sizes) - 1:
+            q, r = _embeddings(b1, b2, c_12, c_21, config)
+            map_12 = nearest_rows(r, q)
+            q, r = _embeddings(b2, b1, c_21, c_12, config)
+            map_21 = nearest_rows(r, q)
+    return c_12, c_21
+
+
+def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig(),
+              progress=None) -> DenseMap:
+    """A target vertex for every source vertex, seeded by sparse ``correspondence``.
+
+    Args:
+        shape_1, shape_2: :class:`~darcyan.pipeline.ShapeDescription` with their intermediate
+            results (from :func:`~darcyan.pipeline.analyze_mesh`, or ``describe_shape`` without a
+            cache): the prepared, area-1 meshes and their geodesic solvers are used.
+        correspondence: anything with ``source_vertex (k,)`` and ``target_vertex (k,)`` in input
+            numbering (a :class:`~darcyan.pipeline.Correspondence`; ``distance (k,)`` breaks ties
+            between landmark sets).
+        config: see :class:`DenseConfig`.
+
+    Returns:
+        a :class:`DenseMap`; ``.target`` is ``(n_input_vertices of shape_1,) int64`` in the input
+        numbering of shape 2 (:data:`UNMAPPED` for vertices outside the analysed mesh).
+
+    Raises:
+        DarcyanError: when a description lacks its intermediates, or fewer than
+            :data:`MIN_LANDMARKS` usable landmark pairs remain.
+    """
+    for shape in (shape_1, shape_2):
+        if shape.mesh is None or shape.solver is None:
+            raise DarcyanError(f"{shape.name}: a dense map needs the full description (describe the shape "
+                               f"without a cache)")
+    say = progress or (lambda stage: None)
+    timings = {}
+    t = time.perf_counter()
+    say("landmarks")
+    src, tgt, fields_1, fields_2 = _landmark_pairs(shape_1, shape_2, correspondence, config)
+    if len(src) < MIN_LANDMARKS:
+        raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: only {len(src)} consistent landmark match(es), "
+                           f"a dense map needs at least {MIN_LANDMARKS}")
+    map_12 = nearest_rows(fields_2, fields_1)  # (n1,) first maps by geodesic landmark coordinates
+    map_21 = nearest_rows(fields_1, fields_2)  # (n2,)
+    timings["landmarks"] = time.perf_counter() - t
+    t = time.perf_counter()
+    say("basis")
+    _, basis_1, _ = laplace_beltrami_basis(shape_1.mesh, config.basis_size)
+    _, basis_2, _ = laplace_beltrami_basis(shape_2.mesh, config.basis_size)
+    timings["basis"] = time.perf_counter() - t
+    t = time.perf_counter()
+    say("zoomout")
+    mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
+    if 0 < config.zoomout_samples < max(mesh_1.n_vertices, mesh_2.n_vertices):
+        sample_1 = surface_sample(mesh_1, config.zoomout_samples)
+        sample_2 = surface_sample(mesh_2, config.zoomout_samples)
+        # The maps restricted to the samples: each image snapped to the nearest sample.
+        sub_12 = cKDTree(mesh_2.vertices[sample_2]).query(mesh_2.vertices[map_12[sample_1]])[1]
+        sub_21 = cKDTree(mesh_1.vertices[sample_1]).query(mesh_1.vertices[map_21[sample_2]])[1]
+    else:
+        sample_1, sample_2 = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
+        sub_12, sub_21 = map_12, map_21
+    c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], sub_12, sub_21, config)
+    k = len(c_12)
+    q, r = _embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config)
+    local = nearest_rows(r, q)
+    timings["zoomout"] = time.perf_counter() - t
+    target = np.full(shape_1.n_input_vertices, UNMAPPED, dtype=np.int64)
+    target[shape_1.mesh.input_index] = shape_2.mesh.input_index[local]
+    landmarks = np.stack([shape_1.mesh.input_index[src], shape_2.mesh.input_index[tgt]], axis=1)
+    return DenseMap(target, landmarks, timings)
+
+
+def dense_map_to_csv(target: np.ndarray) -> str:
+    """CSV ``source_vertex,target_vertex``, one row per source vertex (0-based, input numbering)."""
+    lines = ["source_vertex,target_vertex"] + [f"{s},{t}" for s, t in enumerate(np.asarray(target).tolist())]
+    return "\n".join(lines) + "\n"
+
+
+# ----------------------------------------------------------------------------------------------
+# Evaluation
+
+
+@dataclass(frozen=True)
+class DenseEvaluation:
+    """Errors of a dense map on a sample of source vertices.
+
+    ``source_vertices (s,)`` input numbering; ``errors (s,)`` geodesic error / sqrt(target area).
+    """
+
+    source_vertices: np.ndarray
+    errors: np.ndarray
+    threshold: float = DEFAULT_THRESHOLD
+
+    @property
+    def rate(self) -> float:
+        """Share of sampled vertices within ``threshold``."""
+        return float((self.errors <= self.threshold).mean()) if len(self.errors) else 0.0
+
+    @property
+    def mean(self) -> float:
+        return float(self.errors.mean()) if len(self.errors) else float("nan")
+
+    def curve(self, taus=None) -> np.ndarray:
+        return cumulative_curve(self.errors) if taus is None else cumulative_curve(self.errors, taus)
+
+
+def evaluate_dense(source_mesh: Mesh, target_mesh: Mesh, target: np.ndarray, truth: GroundTruth = GroundTruth(),
+                   sample: int = DENSE_SAMPLE, seed: int = 0, target_solver: GeodesicSolver | None = None,
+                   threshold: float = DEFAULT_THRESHOLD) -> DenseEvaluation:
+    """Score the dense map ``target`` (source input vertex -> target input vertex).
+
+    ``source_mesh``/``target_mesh`` are the analysed meshes (``input_index`` relates them to the
+    files; errors are measured on ``target_mesh`` and divided by the square root of its area).
+    With identity ``truth`` the sample is drawn from the source vertices; with ``.vts`` truth
+    from the listed source samples (their correspondents are known exactly). ``sample`` vertices
+    are drawn with ``numpy.random.default_rng(seed)`` (all when fewer), so two maps of the same
+    pair are scored on the same vertices.
+    """
+    target = np.asarray(target, dtype=np.int64)
+    if truth.source_samples is None:
+        candidates = source_mesh.input_index
+        true_targets = candidates
+    else:
+        candidates = np.asarray(truth.source_samples, dtype=np.int64)
+        true_targets = np.asarray(truth.target_samples, dtype=np.int64)
+    in_source = _to_local(source_mesh, candidates) >= 0
+    true_local = _to_local(target_mesh, true_targets)
+    usable = np.flatnonzero(in_source & (true_local >= 0) & (candidates < len(target)))
+    if len(usable) > sample:
+        usable = np.sort(np.random.default_rng(seed).choice(usable, size=sample, replace=False))
+    sources = candidates[usable]
+    mapped = _to_local(target_mesh, target[sources])
+    solver = target_solver or GeodesicSolver(target_mesh)
+    errors = np.full(len(sources), np.inf)
+    ok = mapped >= 0
+    errors[ok] = geodesic_errors(target_mesh, solver, mapped[ok], true_local[usable][ok])
+    return DenseEvaluation(sources, errors, threshold)

@@ -1,0 +1,196 @@
+"""Dense maps seeded by the sparse matches: accuracy on the synthetic figure, numbering, contracts."""
+
+import csv
+import dataclasses
+import io
+import warnings
+
+import numpy as np
+import pytest
+
+from darcyan import DarcyanConfig, synthetic
+from darcyan.cli import main
+from darcyan.dense import (MAX_EXHAUSTIVE_LANDMARKS, UNMAPPED, DenseConfig, consistent_landmarks, dense_map, dense_map_to_csv,
+                           evaluate_dense, nearest_rows, surface_sample)
+from darcyan.errors import ConfigError, DarcyanError
+from darcyan.evaluation import GroundTruth
+from darcyan.mesh import Mesh, save_mesh
+from darcyan.pipeline import Correspondence, analyze_mesh, match_shapes
+
+# A lighter dense stage than the default, so the tests take seconds (same method).
+FAST = DenseConfig(zoomout_samples=1000, basis_size=40)
+SCORED = 300  # source vertices scored per map
+# Measured on figure pose 0 -> 1 with FAST: 1.000 within 0.05, mean error 0.007 (the default
+# DenseConfig: 1.000 and 0.005); the floors leave a margin.
+MIN_RATE, MAX_MEAN = 0.9, 0.02
+
+
+@pytest.fixture(scope="module")
+def figure_pair():
+    config = DarcyanConfig()
+    shape_1, shape_2 = (analyze_mesh(synthetic.figure(pose), config) for pose in (0, 1))
+    return shape_1, shape_2, match_shapes(shape_1, shape_2, config)
+
+
+def tip_correspondence(source_tips, target_tips):
+    n = len(source_tips)
+    return Correspondence(np.asarray(source_tips), np.asarray(target_tips), np.zeros(n), None)
+
+
+def test_dense_map_on_the_figure_is_mostly_within_the_threshold(figure_pair):
+    shape_1, shape_2, matches = figure_pair
+    result = dense_map(shape_1, shape_2, matches, FAST)
+    n = synthetic.figure(0).n_vertices
+    assert result.target.shape == (n,) and result.target.dtype == np.int64
+    assert result.target.min() >= 0 and result.target.max() < n
+    assert len(result.landmarks) >= 3 and set(result.timings) == {"landmarks", "basis", "zoomout"}
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=SCORED, target_solver=shape_2.solver)
+    assert len(score.errors) == SCORED
+    assert score.rate >= MIN_RATE and score.mean <= MAX_MEAN
+    assert score.curve()[-1] == 1.0  # every sampled vertex lands within 0.25 sqrt(area)
+
+
+def test_a_wrong_match_is_left_out_of_the_landmarks(figure_pair):
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    wrong_target = np.concatenate([tips, [tips[0]]])  # a sixth match: tip 3 -> tip 0
+    wrong_source = np.concatenate([tips, [tips[3]]])
+    result = dense_map(shape_1, shape_2, tip_correspondence(wrong_source, wrong_target), FAST)
+    assert sorted(map(tuple, result.landmarks.tolist())) == sorted(zip(tips.tolist(), tips.tolist()))
+
+
+def test_landmarks_decide_the_map(figure_pair):
+    """Matching every tip to the wrong tip gives a wrong map: the landmarks are what it follows."""
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    rolled = tip_correspondence(tips, np.roll(tips, 1))
+    result = dense_map(shape_1, shape_2, rolled, dataclasses.replace(FAST, landmarks="all"))
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=SCORED, target_solver=shape_2.solver)
+    assert score.rate < 0.5
+
+
+def test_input_numbering_and_left_out_vertices():
+    """A renumbered target and a source with a stray component: the map speaks the files' numbering."""
+    config = DarcyanConfig()
+    pose_0, pose_1 = synthetic.figure(0), synthetic.figure(1)
+    n = pose_0.n_vertices
+    # Source: the figure plus a small tetrahedron far away (left out by preparation).
+    tet_v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float) * 0.1 + 10.0
+    tet_f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]) + n
+    source = Mesh(np.vstack([pose_0.vertices, tet_v]), np.vstack([pose_0.faces, tet_f]), "figure+tet")
+    # Target: pose 1 with its vertices renumbered: new vertex i is old vertex perm[i].
+    perm = np.random.default_rng(3).permutation(n)
+    new_index = np.argsort(perm)
+    target = Mesh(pose_1.vertices[perm], new_index[pose_1.faces], "figure1-renumbered")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        shape_1 = analyze_mesh(source, config)
+    shape_2 = analyze_mesh(target, config)
+    result = dense_map(shape_1, shape_2, match_shapes(shape_1, shape_2, config), FAST)
+    assert result.target.shape == (n + 4,)
+    assert np.all(result.target[n:] == UNMAPPED) and np.all(result.target[:n] >= 0)
+    truth = GroundTruth(np.arange(n), new_index)  # source vertex v is target vertex new_index[v]
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, truth, sample=SCORED,
+                           target_solver=shape_2.solver)
+    assert score.rate >= MIN_RATE and score.mean <= MAX_MEAN
+    # Read in the wrong numbering, the same map is mostly wrong: the test can tell.
+    wrong = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, GroundTruth(), sample=SCORED,
+                           target_solver=shape_2.solver)
+    assert wrong.rate < 0.2
+
+
+def test_evaluate_dense_identity_and_shift(figure_pair):
+    shape_1, shape_2, _ = figure_pair
+    n = shape_1.n_input_vertices
+    exact = evaluate_dense(shape_1.mesh, shape_2.mesh, np.arange(n), sample=50, target_solver=shape_2.solver)
+    assert exact.rate == 1.0 and exact.mean == 0.0
+    again = evaluate_dense(shape_1.mesh, shape_2.mesh, np.arange(n), sample=50, target_solver=shape_2.solver)
+    assert np.array_equal(exact.source_vertices, again.source_vertices)  # a fixed sample
+    far = np.full(n, int(synthetic.figure_tips()[0]))  # everything to one tip
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, far, sample=50, target_solver=shape_2.solver)
+    assert score.rate < 0.2 and score.mean > 0.1
+
+
+def test_consistent_landmarks_keeps_the_largest_agreeing_set():
+    # Four points on a line at 0, 1, 2, 4; the fourth match lands at 9 on the target.
+    x1, x2 = np.array([0.0, 1, 2, 4]), np.array([0.0, 1, 2, 9])
+    d1, d2 = np.abs(x1[:, None] - x1), np.abs(x2[:, None] - x2)
+    assert consistent_landmarks(d1, d2, 0.1, 0.0).tolist() == [0, 1, 2]
+    assert consistent_landmarks(d1, d1, 0.1, 0.0).tolist() == [0, 1, 2, 3]
+    assert len(consistent_landmarks(np.zeros((0, 0)), np.zeros((0, 0)), 0.1, 0.0)) == 0
+    # Above the exhaustive limit, the greedy search drops the one disagreeing match too.
+    x1 = np.arange(MAX_EXHAUSTIVE_LANDMARKS + 6, dtype=float)
+    x2 = x1.copy()
+    x2[7] = 1000.0
+    d1, d2 = np.abs(x1[:, None] - x1), np.abs(x2[:, None] - x2)
+    assert consistent_landmarks(d1, d2, 0.1, 0.0).tolist() == [i for i in range(len(x1)) if i != 7]
+
+
+@pytest.mark.parametrize("dim", [3, 40])
+def test_nearest_rows_agrees_with_brute_force(dim):
+    rng = np.random.default_rng(dim)
+    reference, queries = rng.normal(size=(500, dim)), rng.normal(size=(200, dim))
+    expected = np.argmin(((queries[:, None, :] - reference[None]) ** 2).sum(axis=2), axis=1)
+    assert np.array_equal(nearest_rows(reference, queries), expected)
+
+
+def test_surface_sample_is_distinct_sorted_and_seeded(sphere):
+    a, b = surface_sample(sphere, 300, seed=1), surface_sample(sphere, 300, seed=1)
+    assert np.array_equal(a, b) and len(np.unique(a)) == 300 and np.all(np.diff(a) > 0)
+    assert len(surface_sample(sphere, 10**6)) == sphere.n_vertices
+
+
+def test_errors_name_the_problem(figure_pair):
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    with pytest.raises(DarcyanError, match="at least 3"):
+        dense_map(shape_1, shape_2, tip_correspondence(tips[:2], tips[:2]), FAST)
+    stripped = dataclasses.replace(shape_1, name="cached.off", mesh=None, solver=None)  # as from the cache
+    with pytest.raises(DarcyanError, match="cached.off.*without a cache"):
+        dense_map(stripped, shape_2, tip_correspondence(tips, tips), FAST)
+    with pytest.raises(ConfigError, match="landmarks"):
+        DenseConfig(landmarks="some")
+    with pytest.raises(ConfigError, match="basis_start"):
+        DenseConfig(basis_start=50, basis_size=20)
+
+
+def test_dense_csv_format():
+    assert dense_map_to_csv(np.array([2, 0, -1])) == "source_vertex,target_vertex\n0,2\n1,0\n2,-1\n"
+
+
+@pytest.fixture
+def small_pose_files(tmp_path, monkeypatch):
+    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
+    paths = []
+    for pose in (0, 1):
+        path = tmp_path / f"figure{pose}.off"
+        save_mesh(synthetic.figure(pose, subdivisions=4), path)
+        paths.append(path)
+    return paths
+
+
+def test_cli_dense_writes_one_row_per_source_vertex(small_pose_files, tmp_path, capsys):
+    out_file = tmp_path / "map.csv"
+    code = main(["match", *map(str, small_pose_files), "--dense", "-o", str(out_file)])
+    assert code == 0
+    rows = list(csv.DictReader(io.StringIO(out_file.read_text())))
+    n = synthetic.figure(0, subdivisions=4).n_vertices
+    assert list(rows[0]) == ["source_vertex", "target_vertex"] and len(rows) == n
+    source = np.array([int(r["source_vertex"]) for r in rows])
+    target = np.array([int(r["target_vertex"]) for r in rows])
+    assert np.array_equal(source, np.arange(n)) and target.min() >= 0 and target.max() < n
+    # Pose 0 -> 1 shares the numbering: the map is mostly right (identity truth).
+    shape_1, shape_2 = (analyze_mesh(synthetic.figure(p, subdivisions=4), DarcyanConfig()) for p in (0, 1))
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, target, sample=SCORED, target_solver=shape_2.solver)
+    assert score.rate >= MIN_RATE
+    # Without --dense, the sparse contract is unchanged.
+    assert main(["match", *map(str, small_pose_files), "--no-cache"]) == 0
+    assert capsys.readouterr().out.splitlines()[0] == "source_vertex,target_vertex,distance"
+
+
+def test_cli_dense_error_is_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.off"
+    bad.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n")
+    assert main(["match", str(bad), str(bad), "--dense"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("darcyan: error:") and len(err.strip().splitlines()) == 1
