@@ -33,12 +33,18 @@ import scipy.sparse.linalg as sla
 from scipy.spatial import cKDTree
 
 from .curvature import cotangent_laplacian, mixed_voronoi_area
-from .errors import ConfigError, DarcyanError
+from .errors import ConfigError, DarcyanError, require
 from .evaluation import DEFAULT_THRESHOLD, GroundTruth, cumulative_curve, geodesic_errors
 from .geodesics import GeodesicSolver
 from .mesh import Mesh
 
 LANDMARK_MODES = ("consistent", "all")
+METHODS = ("zoomout", "pyfm")
+# method="pyfm": pyFM's pipeline (WKS plus landmark-centred WKS, Laplacian and descriptor
+# commutativity) with these sizes, then its ZoomOut; the weights are its README's.
+PYFM_FMAP_SIZE, PYFM_FINAL_BASIS, PYFM_ZOOMOUT_STEP = 50, 200, 10
+PYFM_DESCRIPTORS, PYFM_SUBSAMPLE_STEP = 100, 5
+PYFM_WEIGHTS = {"w_descr": 1e0, "w_lap": 1e-2, "w_dcomm": 1e-1}
 UNMAPPED = -1  # source vertices the analysis left out (outside the largest component)
 # Nearest-neighbour search: a k-d tree up to this dimension, chunked brute force above it.
 KDTREE_MAX_DIM = 16
@@ -58,6 +64,10 @@ class DenseConfig:
     """Parameters of :func:`dense_map`.
 
     Attributes:
+        method: ``"zoomout"``: geodesic landmark coordinates, then the bijective ZoomOut below;
+            ``"pyfm"``: pyFM's functional map with the landmarks as descriptors, then its ZoomOut
+            (``pip install 'darcyan[pyfm]'``; slower, the ``basis_*``, ``zoomout_samples``,
+            ``bijectivity`` and ``orthogonality`` fields do not apply).
         landmarks: ``"consistent"``: keep the largest set of matches whose pairwise geodesic
             distances agree on both shapes (see ``consistency``); ``"all"``: every match.
         consistency: two matches agree when their geodesic distances on the two shapes differ by
@@ -73,6 +83,7 @@ class DenseConfig:
             nearest-neighbour searches (0 and 0 = plain ZoomOut).
     """
 
+    method: str = "zoomout"
     landmarks: str = "consistent"
     consistency: float = 0.3
     consistency_floor: float = 0.02
@@ -84,6 +95,8 @@ class DenseConfig:
     orthogonality: float = 1.0
 
     def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise ConfigError(f"dense: method must be one of {METHODS}, got {self.method!r}")
         if self.landmarks not in LANDMARK_MODES:
             raise ConfigError(f"dense: landmarks must be one of {LANDMARK_MODES}, got {self.landmarks!r}")
         for name in ("basis_start", "basis_size", "basis_step"):
@@ -307,6 +320,24 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     return c_12, c_21
 
 
+def pyfm_map(mesh_1: Mesh, mesh_2: Mesh, landmarks_1: np.ndarray, landmarks_2: np.ndarray) -> np.ndarray:
+    """``(n1,)`` vertices of ``mesh_2`` for the vertices of ``mesh_1`` by pyFM (optional extra
+    ``pyfm``): WKS and landmark WKS descriptors, a functional map of size
+    :data:`PYFM_FMAP_SIZE`, ZoomOut up to :data:`PYFM_FINAL_BASIS`. ``landmarks_i (k,)`` local
+    vertex indices, pairwise corresponding."""
+    functional = require("pyFM.functional", "pyfm")
+    trimesh = require("pyFM.mesh", "pyfm")
+    # pyFM's map goes from its second mesh to its first: the target is mesh 1 there.
+    model = functional.FunctionalMapping(trimesh.TriMesh(mesh_2.vertices, mesh_2.faces),
+                                         trimesh.TriMesh(mesh_1.vertices, mesh_1.faces))
+    model.preprocess(n_descr=PYFM_DESCRIPTORS, descr_type="WKS", subsample_step=PYFM_SUBSAMPLE_STEP,
+                     k_process=PYFM_FINAL_BASIS, landmarks=np.stack([landmarks_2, landmarks_1], axis=1))
+    model.fit(K=(PYFM_FMAP_SIZE, PYFM_FMAP_SIZE), **PYFM_WEIGHTS)
+    refined = model.zoomout_refine(nit=(PYFM_FINAL_BASIS - PYFM_FMAP_SIZE) // PYFM_ZOOMOUT_STEP,
+                                   step=PYFM_ZOOMOUT_STEP)
+    return np.asarray(model.get_p2p(refined), dtype=np.int64)
+
+
 def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig(),
               progress=None) -> DenseMap:
     """A target vertex for every source vertex, seeded by sparse ``correspondence``.
@@ -340,31 +371,38 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     if len(src) < MIN_LANDMARKS:
         raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: only {len(src)} consistent landmark match(es), "
                            f"a dense map needs at least {MIN_LANDMARKS}")
-    map_12 = nearest_rows(fields_2, fields_1)  # (n1,) first maps by geodesic landmark coordinates
-    map_21 = nearest_rows(fields_1, fields_2)  # (n2,)
-    timings["landmarks"] = time.perf_counter() - t
-    t = time.perf_counter()
-    say("basis")
-    _, basis_1, _ = laplace_beltrami_basis(shape_1.mesh, config.basis_size)
-    _, basis_2, _ = laplace_beltrami_basis(shape_2.mesh, config.basis_size)
-    timings["basis"] = time.perf_counter() - t
-    t = time.perf_counter()
-    say("zoomout")
-    mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
-    if 0 < config.zoomout_samples < max(mesh_1.n_vertices, mesh_2.n_vertices):
-        sample_1 = surface_sample(mesh_1, config.zoomout_samples)
-        sample_2 = surface_sample(mesh_2, config.zoomout_samples)
-        # The maps restricted to the samples: each image snapped to the nearest sample.
-        sub_12 = cKDTree(mesh_2.vertices[sample_2]).query(mesh_2.vertices[map_12[sample_1]])[1]
-        sub_21 = cKDTree(mesh_1.vertices[sample_1]).query(mesh_1.vertices[map_21[sample_2]])[1]
+    if config.method == "pyfm":
+        timings["landmarks"] = time.perf_counter() - t
+        t = time.perf_counter()
+        say("pyfm")
+        local = pyfm_map(shape_1.mesh, shape_2.mesh, src, tgt)
+        timings["pyfm"] = time.perf_counter() - t
     else:
-        sample_1, sample_2 = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
-        sub_12, sub_21 = map_12, map_21
-    c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], sub_12, sub_21, config)
-    k = len(c_12)
-    q, r = _embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config)
-    local = nearest_rows(r, q)
-    timings["zoomout"] = time.perf_counter() - t
+        map_12 = nearest_rows(fields_2, fields_1)  # (n1,) first maps by geodesic landmark coordinates
+        map_21 = nearest_rows(fields_1, fields_2)  # (n2,)
+        timings["landmarks"] = time.perf_counter() - t
+        t = time.perf_counter()
+        say("basis")
+        _, basis_1, _ = laplace_beltrami_basis(shape_1.mesh, config.basis_size)
+        _, basis_2, _ = laplace_beltrami_basis(shape_2.mesh, config.basis_size)
+        timings["basis"] = time.perf_counter() - t
+        t = time.perf_counter()
+        say("zoomout")
+        mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
+        if 0 < config.zoomout_samples < max(mesh_1.n_vertices, mesh_2.n_vertices):
+            sample_1 = surface_sample(mesh_1, config.zoomout_samples)
+            sample_2 = surface_sample(mesh_2, config.zoomout_samples)
+            # The maps restricted to the samples: each image snapped to the nearest sample.
+            sub_12 = cKDTree(mesh_2.vertices[sample_2]).query(mesh_2.vertices[map_12[sample_1]])[1]
+            sub_21 = cKDTree(mesh_1.vertices[sample_1]).query(mesh_1.vertices[map_21[sample_2]])[1]
+        else:
+            sample_1, sample_2 = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
+            sub_12, sub_21 = map_12, map_21
+        c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], sub_12, sub_21, config)
+        k = len(c_12)
+        q, r = _embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config)
+        local = nearest_rows(r, q)
+        timings["zoomout"] = time.perf_counter() - t
     target = np.full(shape_1.n_input_vertices, UNMAPPED, dtype=np.int64)
     target[shape_1.mesh.input_index] = shape_2.mesh.input_index[local]
     landmarks = np.stack([shape_1.mesh.input_index[src], shape_2.mesh.input_index[tgt]], axis=1)
