@@ -28,10 +28,10 @@ GRID = {
     "levels": [2, 4, 6, 8, 12],
     "radial_lines": [4, 8, 16, 32],
     "interpolation": [1, 2, 4],
-    "curvature_smoothing": [0, 1, 2, 4, 8],
+    "curvature_smoothing": [0, 2, 4, 8],
     "agd_sources": [8, 16, 24, 48],
-    "agd_smoothing": [0.0, 0.03, 0.07, 0.1],
-    "extremity_radius": [0.1, 0.15, 0.25, 0.35],
+    "agd_smoothing": [0.0, 0.04, 0.07, 0.1, 0.14],
+    "extremity_radius": [0.15, 0.25, 0.35],
 }
 MATCHINGS = ("consistent", "nearest")
 
@@ -49,6 +49,8 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default="sweep-out")
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--only", nargs="*", choices=sorted(GRID), help="parameters to sweep (default: all)")
+    parser.add_argument("--values", nargs="*", type=float, help="with one --only parameter: these values instead of the grid's")
+    parser.add_argument("--matchings", nargs="*", choices=MATCHINGS, default=list(MATCHINGS))
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -59,9 +61,10 @@ def main(argv=None) -> int:
         rows = json.loads(store.read_text())
     done = {(r["param"], r["value"], r["matching"]) for r in rows}
     for name in args.only or GRID:
-        values = sorted(set(GRID[name]) | {getattr(base, name)})
-        for value in values:
-            for matching in MATCHINGS:
+        values = sorted(set(args.values or GRID[name]) | {getattr(base, name)})
+        kind = type(getattr(base, name))
+        for value in map(kind, values):
+            for matching in args.matchings:
                 if (name, value, matching) in done:
                     continue
                 config = base.replace(**{name: value, "matching": matching})
@@ -80,7 +83,23 @@ def main(argv=None) -> int:
                       f"{row['rate_per_feature']:.3f}  sym {row['rate_sym']:.3f}  rep {row['repeatability']:.3f}",
                       flush=True)
     plot(rows, out)
+    (out / "sweep.md").write_text(markdown(rows))
     return 0
+
+
+def markdown(rows: list) -> str:
+    """The study as a Markdown table: one row per parameter value, both matchings."""
+    lines = ["| parameter | value | consistent: rate per feature | rate_sym | nearest: rate per feature | rate_sym | repeatability |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    keyed = {(r["param"], r["value"], r["matching"]): r for r in rows}
+    for name, value in sorted({(r["param"], r["value"]) for r in rows}):
+        c, n = keyed.get((name, value, "consistent")), keyed.get((name, value, "nearest"))
+        default = " (default)" if (c or n)["default"] else ""
+        cells = [f"{r[k]:.3f}" if r else "" for r in (c,) for k in ("rate_per_feature", "rate_sym")]
+        cells += [f"{r[k]:.3f}" if r else "" for r in (n,) for k in ("rate_per_feature", "rate_sym")]
+        rep = (c or n)["repeatability"]
+        lines.append(f"| {name} | {value}{default} | " + " | ".join(cells) + f" | {rep:.3f} |")
+    return "\n".join(lines) + "\n"
 
 
 def _per_feature(results: dict) -> float:

@@ -500,3 +500,18 @@ def test_several_components_use_the_largest_with_one_warning(capsys, tmp_path, c
     assert len(lines) == 1 and lines[0].startswith(f"darcyan: warning: {path}: 2 connected components")
     assert f"{ball.n_faces} faces" in lines[0]
     assert features_rows(out) == [(v + shift, a) for v, a in clean]
+
+
+def test_a_cache_hit_repeats_the_warning_of_the_run_that_filled_it(capsys, tmp_path, clean_wolf):
+    mesh, clean = clean_wolf
+    ball = synthetic.icosphere(2, 5.0)
+    combined = Mesh(np.vstack([mesh.vertices, ball.vertices + mesh.vertices.max(axis=0) + 50.0]),
+                    np.vstack([mesh.faces, ball.faces + mesh.n_vertices]))
+    path = tmp_path / "two_parts.off"
+    save_mesh(combined, path)
+    runs = [run(capsys, "features", path) for _ in range(2)]  # the second is served by the cache
+    assert [code for code, _, _ in runs] == [0, 0]
+    assert runs[0][1] == runs[1][1] and features_rows(runs[1][1]) == clean
+    for _, _, err in runs:
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith(f"darcyan: warning: {path}: 2 connected components")

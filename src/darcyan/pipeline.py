@@ -9,6 +9,7 @@ Feature vertices are always reported in the numbering of the input file.
 from __future__ import annotations
 
 import os
+import warnings
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,7 +27,7 @@ from .symmetry import OrientedSurface, choose_orientation, curvature_signature
 from .grid import DarcyanGrid, darcyan_grids
 from .matching import Matches, consistent_candidates, match_descriptors
 from .proxy import coarse_proxy
-from .mesh import Mesh, Normalization, load_mesh, normalize_mesh, prepare_mesh
+from .mesh import Mesh, MeshWarning, Normalization, load_mesh, normalize_mesh, prepare_mesh
 
 
 @dataclass
@@ -193,7 +194,9 @@ def describe_shape(source: str | os.PathLike | Mesh, config: DarcyanConfig = Dar
     if cache is not None:
         key = cache.key(file_digest(path), config.fingerprint(*DESCRIBE_FIELDS), f"repair={repair}")
         stored = cache.load(key)
-        if stored is not None:
+        if stored is not None and _CACHED_KEYS <= stored.keys():
+            for message in stored.get("warnings", ()):
+                warnings.warn(str(message), MeshWarning, stacklevel=2)  # a cache hit says what a run said
             return ShapeDescription(
                 name=str(path), n_input_vertices=int(stored["n_input_vertices"]),
                 feature_vertices=stored["feature_vertices"], feature_agd=stored["feature_agd"],
@@ -202,10 +205,22 @@ def describe_shape(source: str | os.PathLike | Mesh, config: DarcyanConfig = Dar
                                         stored["surface_landmark_distances"], stored.get("surface_signature")),
                 changes=[str(c) for c in stored["changes"]],
                 timings={"cache": 0.0})
-    description = analyze_mesh(load_mesh(path), config, repair, progress)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", MeshWarning)
+        description = analyze_mesh(load_mesh(path), config, repair, progress)
+    said = []
+    for w in caught:
+        if issubclass(w.category, MeshWarning):
+            said.append(str(w.message))
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if cache is not None:
-        cache.save(key, description.arrays())
+        cache.save(key, {**description.arrays(), "warnings": np.array(said, dtype=str)})
     return description
+
+
+# What a cache entry must hold to be used (older entries without them are recomputed).
+_CACHED_KEYS = {"feature_vertices", "feature_agd", "descriptors", "feature_geodesics", "n_input_vertices",
+                "changes", "surface_points", "surface_normals", "surface_landmark_distances"}
 
 
 # The parameters a shape description depends on (matching does not change it).
