@@ -109,3 +109,34 @@ def test_installed_entry_point_has_no_traceback(tmp_path):
                           capture_output=True, text=True)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert proc.stderr.strip().count("\n") == 0
+
+
+def test_two_worker_processes_give_what_one_process_gives(capsys, pose_files, tmp_path):
+    one = run(capsys, "match", *pose_files, "--jobs", "1", "--no-cache")
+    two = run(capsys, "match", *pose_files, "--jobs", "2", "--no-cache")
+    assert one[0] == two[0] == 0 and one[1] == two[1] and len(one[1].splitlines()) == 6
+    # What a worker warns or refuses reaches the command line as in one process.
+    ball = synthetic.icosphere(2, 0.2)
+    figure = synthetic.figure(1)
+    two_parts = tmp_path / "two_parts.off"
+    save_mesh(type(figure)(np.vstack([figure.vertices, ball.vertices + 10.0]),
+                           np.vstack([figure.faces, ball.faces + figure.n_vertices])), two_parts)
+    code, out, err = run(capsys, "match", pose_files[0], two_parts, "--jobs", "2")
+    assert code == 0 and out == two[1]
+    assert err.count("darcyan: warning:") == 1 and f"{two_parts}: 2 connected components" in err
+    broken = tmp_path / "broken.off"
+    broken.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\nnan 1 0\n3 0 1 2\n")
+    code, out, err = run(capsys, "match", pose_files[0], broken, "--jobs", "2", "--no-cache")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and str(broken) in err
+
+
+def test_paper_preset_and_options_beside_it():
+    from darcyan import DarcyanConfig
+    from darcyan.cli import _config, build_parser
+
+    parse = build_parser().parse_args
+    assert _config(parse(["match", "a.off", "b.off"])) == DarcyanConfig()
+    assert _config(parse(["match", "a.off", "b.off", "--paper"])) == DarcyanConfig.paper()
+    assert DarcyanConfig.paper().matching == "nearest" and DarcyanConfig.paper().agd_smoothing == 0
+    mixed = _config(parse(["bench", "data", "--paper", "--radius", "0.08", "--matching", "one-to-one"]))
+    assert mixed == DarcyanConfig.paper(radius=0.08, matching="one-to-one")

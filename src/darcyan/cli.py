@@ -43,17 +43,22 @@ def _add_config_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("method parameters (lengths in units of sqrt(surface area))")
     for name, text in CONFIG_HELP.items():
         value = getattr(defaults, name)
-        group.add_argument(f"--{name.replace('_', '-')}", type=type(value), default=value,
-                           help=f"{text} (default %(default)s)")
+        group.add_argument(f"--{name.replace('_', '-')}", type=type(value), default=None,
+                           help=f"{text} (default {value})")
+    group.add_argument("--paper", action="store_true",
+                       help="the paper's method as published: plain AGD maxima (--agd-smoothing 0 --extremity-radius "
+                            "0.15) and nearest-descriptor matching; options given beside it still apply")
     parser.add_argument("--repair", action="store_true", help="drop duplicate/degenerate faces and unreferenced vertices instead of refusing them")
     parser.add_argument("--no-cache", action="store_true", help="do not read or write the per-shape cache ($DARCYAN_CACHE)")
 
 
 def _config(args: argparse.Namespace) -> DarcyanConfig:
-    values = {name: getattr(args, name) for name in CONFIG_HELP}
+    """The defaults (or the paper's setup with ``--paper``), changed by the options given."""
+    base = DarcyanConfig.paper() if getattr(args, "paper", False) else DarcyanConfig()
+    values = {name: getattr(args, name) for name in CONFIG_HELP if getattr(args, name, None) is not None}
     if getattr(args, "matching", None):
         values["matching"] = args.matching
-    return DarcyanConfig(**values)
+    return base.replace(**values)
 
 
 def _cache(args: argparse.Namespace) -> ShapeCache | None:
@@ -77,10 +82,12 @@ def _note_changes(shape) -> None:
 
 
 def cmd_match(args: argparse.Namespace) -> int:
-    from .pipeline import describe_shape, match_shapes
+    from .pipeline import describe_shape, describe_shapes, match_shapes
 
     config = _config(args)
-    cache = None if args.dense else _cache(args)  # a dense map needs the full descriptions
+    if args.jobs < 1:
+        raise DarcyanError(f"--jobs must be at least 1, got {args.jobs}")
+    cache = _cache(args)
     truth = None
     if args.truth:
         if not (args.plot or args.html):
@@ -89,9 +96,11 @@ def cmd_match(args: argparse.Namespace) -> int:
 
         truth = read_truth(args.truth)
     _picture_dependencies(args)
-    shape_1 = describe_shape(args.source, config, args.repair, cache)
+    if args.dense:  # a dense map needs the meshes and solvers, which stay in this process
+        shape_1, shape_2 = (describe_shape(path, config, args.repair) for path in (args.source, args.target))
+    else:
+        shape_1, shape_2 = describe_shapes([args.source, args.target], config, args.repair, cache, args.jobs)
     _note_changes(shape_1)
-    shape_2 = describe_shape(args.target, config, args.repair, cache)
     _note_changes(shape_2)
     correspondence = match_shapes(shape_1, shape_2, config)
     if args.dense:
@@ -220,10 +229,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("source", help="mesh file (.off .obj .ply .vert/.tri)")
     p.add_argument("target", help="mesh file (.off .obj .ply .vert/.tri)")
     p.add_argument("-o", "--output", help="CSV file to write (default: stdout)")
-    p.add_argument("--matching", choices=MATCHING_MODES, default=DarcyanConfig().matching,
-                   help="nearest: the paper's nearest descriptor; one-to-one: optimal assignment (default %(default)s)")
+    p.add_argument("--matching", choices=MATCHING_MODES,
+                   help="nearest: the paper's nearest descriptor; one-to-one: optimal assignment; consistent: "
+                        f"geodesic layout and orientation too (default {DarcyanConfig().matching})")
     p.add_argument("--dense", action="store_true", help="write a dense map instead: CSV source_vertex,target_vertex, "
                    "one row per source vertex, seeded by the feature matches (geodesic landmark coordinates refined by ZoomOut)")
+    p.add_argument("--jobs", type=int, default=2, help="processes describing the two shapes at once when neither "
+                   "is in the cache (default %(default)s)")
     p.add_argument("--plot", metavar="FILE.png", help="also draw the matches side by side to a PNG (pip install 'darcyan[plot]')")
     p.add_argument("--html", metavar="FILE.html", help="also write an interactive, self-contained HTML view (pip install 'darcyan[html]')")
     p.add_argument("--truth", metavar="identity|A.vts,B.vts", help="ground truth for the pictures: mark wrong matches "
@@ -282,7 +294,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on a dask.distributed scheduler (pip install 'darcyan[dask]')")
     p.add_argument("--resume", action="store_true", help="keep the finished pairs in --out and compute only the others")
     p.add_argument("--laplacian", choices=("cotangent", "robust"), default="cotangent", help="Laplace-Beltrami operator of hks/wks (default %(default)s)")
-    p.add_argument("--matching", choices=MATCHING_MODES, default=DarcyanConfig().matching, help="descriptor matching of darcyan/hks/wks (default %(default)s)")
+    p.add_argument("--matching", choices=MATCHING_MODES, help=f"descriptor matching of darcyan/hks/wks (default {DarcyanConfig().matching})")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no table on stdout")
     _add_config_options(p)
     p.set_defaults(func=cmd_bench)

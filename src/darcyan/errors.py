@@ -20,6 +20,9 @@ class MeshError(DarcyanError):
         self.problem = problem
         super().__init__(f"{self.source}: {problem}")
 
+    def __reduce__(self):  # so that an error raised in a worker process arrives whole
+        return type(self), (self.source, self.problem)
+
 
 class ConfigError(DarcyanError):
     """A parameter value outside its documented range."""

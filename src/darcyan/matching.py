@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from .errors import ConfigError
 
@@ -56,6 +55,8 @@ def match_descriptors(desc_1: np.ndarray, desc_2: np.ndarray, mode: str = "neare
         src = np.flatnonzero(np.isfinite(dist).any(axis=1))
         tgt = np.argmin(dist[src], axis=1)
     elif mode == "one-to-one":
+        from scipy.optimize import linear_sum_assignment  # lazily: importing it costs ~0.2 s of start-up
+
         finite = np.where(np.isfinite(dist), dist, 1e12)
         src, tgt = linear_sum_assignment(finite)
         keep = np.isfinite(dist[src, tgt])
