@@ -242,7 +242,8 @@ def _describe_arrays(task: tuple) -> tuple:
 def _cache_key(cache: ShapeCache | None, path: Path, config: DarcyanConfig, repair: bool) -> str | None:
     if cache is None:
         return None
-    return cache.key(file_digest(path), config.fingerprint(*DESCRIBE_FIELDS), f"repair={repair}")
+    return cache.key(file_digest(path), config.fingerprint(*DESCRIBE_FIELDS), f"repair={repair}",
+                     f"surface={SURFACE_FORMAT}")
 
 
 def _cached(cache: ShapeCache | None, key: str | None, path: Path) -> ShapeDescription | None:
@@ -275,6 +276,10 @@ def _reemit(caught: list) -> list:
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return said
 
+
+# Bumped when what a description stores about the surface changes (the signature's scaling), so
+# old descriptions are recomputed while other cached work (spectra, mirror maps) is kept.
+SURFACE_FORMAT = 2
 
 # What a cache entry must hold to be used (older entries without them are recomputed).
 _CACHED_KEYS = {"feature_vertices", "feature_agd", "descriptors", "feature_geodesics", "n_input_vertices",

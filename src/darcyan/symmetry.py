@@ -18,14 +18,18 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 # Sample points on the source; their spacing sets the size of the test triangles (area 1:
-# spacing about 1/sqrt(SAMPLES) = 0.07 in sqrt(area) units, above the coarse map's error).
-SAMPLES = 200
+# spacing about 1/sqrt(SAMPLES) = 0.035 in sqrt(area) units). Each sample makes a triangle with
+# every two of its NEIGHBOURS nearest samples, so most test triangles are several spacings wide,
+# larger than the coarse map's error. Chosen on tosca-5k (docs/parameters.md): with 200 samples
+# and one triangle per sample, 165 of the 203 test pairs got their true matching; with these, 190.
+SAMPLES = 800
+NEIGHBOURS = 6
 # A triangle votes only when it is far from degenerate on both shapes (|sin| of its corner).
 MIN_SINE = 0.3
 # Diffusion lengths (sqrt(area) units) of the mean curvature making up the point signature, and
-# its weight against landmark distances (chosen on tosca-5k, docs/parameters.md).
+# its weight against landmark distances in the coarse map (chosen on tosca-5k, docs/parameters.md).
 SIGNATURE_LENGTHS = (0.05, 0.1, 0.2)
-SIGNATURE_WEIGHT = 0.3
+SIGNATURE_WEIGHT = 0.9
 # Candidates (best first) whose orientation is tested, and the score of full agreement per match.
 CANDIDATES_TESTED = 8
 ORIENTATION_WEIGHT = 1.0
@@ -52,15 +56,15 @@ class OrientedSurface:
 
 def curvature_signature(mesh, mean_curvature: np.ndarray) -> np.ndarray:
     """``(n, 3)`` mean curvature diffused over ``SIGNATURE_LENGTHS``, each scaled to mean
-    magnitude 1 and weighted by ``SIGNATURE_WEIGHT``: a cheap, intrinsic, mirror-blind signature
-    that differs between the front and the back of a torso or a limb."""
+    magnitude 1: a cheap, intrinsic, mirror-blind signature that differs between the front and
+    the back of a torso or a limb."""
     from .features import heat_diffuse
 
     columns = []
     for length in SIGNATURE_LENGTHS:
         c = heat_diffuse(mesh, mean_curvature, length)
         columns.append(c / max(float(np.abs(c).mean()), 1e-12))
-    return SIGNATURE_WEIGHT * np.stack(columns, axis=1)
+    return np.stack(columns, axis=1)
 
 
 def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2: OrientedSurface | None):
@@ -92,19 +96,21 @@ def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface
     embed_1 = surface_1.landmark_distances[landmarks_1][:, samples].T  # (s, m)
     embed_2 = surface_2.landmark_distances[landmarks_2].T  # (n2, m)
     if surface_1.signature is not None and surface_2.signature is not None:
-        embed_1 = np.hstack([embed_1, surface_1.signature[samples]])
-        embed_2 = np.hstack([embed_2, surface_2.signature])
+        embed_1 = np.hstack([embed_1, SIGNATURE_WEIGHT * surface_1.signature[samples]])
+        embed_2 = np.hstack([embed_2, SIGNATURE_WEIGHT * surface_2.signature])
     image = cKDTree(embed_2).query(embed_1)[1]  # each sample's image on shape 2
     x = surface_1.points[samples]
-    _, neighbours = cKDTree(x).query(x, k=3)
-    q, r = neighbours[:, 1], neighbours[:, 2]
-    s1 = _corner_sine(x, surface_1.normals[samples], np.arange(len(samples)), q, r)
-    y = surface_2.points[image]
-    s2 = _corner_sine(y, surface_2.normals[image], np.arange(len(samples)), q, r)
-    votes = (np.abs(s1) >= MIN_SINE) & (np.abs(s2) >= MIN_SINE)
-    if not votes.any():
-        return 0.0
-    return float(np.mean(np.sign(s1[votes]) * np.sign(s2[votes])))
+    neighbours = cKDTree(x).query(x, k=min(NEIGHBOURS, len(samples) - 1) + 1)[1][:, 1:]
+    p = np.arange(len(samples))
+    votes = []
+    for i, j in zip(*np.triu_indices(neighbours.shape[1], k=1)):
+        q, r = neighbours[:, i], neighbours[:, j]
+        s1 = _corner_sine(x, surface_1.normals[samples], p, q, r)
+        s2 = _corner_sine(surface_2.points[image], surface_2.normals[image], p, q, r)
+        ok = (np.abs(s1) >= MIN_SINE) & (np.abs(s2) >= MIN_SINE)
+        votes.append(np.sign(s1[ok]) * np.sign(s2[ok]))
+    votes = np.concatenate(votes)
+    return float(votes.mean()) if len(votes) else 0.0
 
 
 def _corner_sine(points, normals, p, q, r) -> np.ndarray:

@@ -1,0 +1,63 @@
+"""Telling a correspondence from its mirror image (darcyan.symmetry)."""
+
+import numpy as np
+import pytest
+
+from darcyan import DarcyanConfig, analyze_mesh, describe_shape, match_shapes
+from darcyan.mesh import Mesh
+from darcyan.symmetry import orientation_agreement
+
+from conftest import random_rotation
+
+
+def _same_vertex(shape_1, shape_2):
+    """Feature indices of both shapes that sit on the same vertex number."""
+    common = np.intersect1d(shape_1.feature_vertices, shape_2.feature_vertices)
+    where = lambda shape: np.array([np.flatnonzero(shape.feature_vertices == v)[0] for v in common])  # noqa: E731
+    return where(shape_1), where(shape_2)
+
+
+def test_orientation_agreement_is_plus_one_for_a_motion_and_minus_one_for_a_reflection(figure_poses):
+    figure = figure_poses[0]
+    moved = Mesh(figure.vertices @ random_rotation(3).T + [1.0, -2.0, 0.5], figure.faces)
+    # A reflection, with the faces turned over so the normals still point outward.
+    mirrored = Mesh(figure.vertices * [-1.0, 1.0, 1.0], figure.faces[:, ::-1].copy())
+    shape = analyze_mesh(figure)
+    for other, expected in ((moved, 1.0), (mirrored, -1.0)):
+        described = analyze_mesh(other)
+        landmarks_1, landmarks_2 = _same_vertex(shape, described)
+        assert len(landmarks_1) >= 4
+        agreement = orientation_agreement(shape.surface, described.surface, landmarks_1, landmarks_2)
+        assert agreement == pytest.approx(expected, abs=0.1)
+        # The same landmarks in the wrong order are no evidence of a motion.
+        assert orientation_agreement(shape.surface, described.surface, landmarks_1, landmarks_2[::-1]) < 0.6
+
+
+# TOSCA humans whose hands (or hands and feet) went to the other side before the orientation test
+# used wide triangles (measured 2026-11-24 with `darcyan bench ../shared/data/tosca-5k --pairs
+# test_pairs.txt`: 11 of these 25 matches were correct, with the wider triangles 25 of 25).
+HUMAN_PAIRS = (("michael0", "michael2"), ("michael18", "michael3"), ("michael12", "michael4"),
+               ("michael12", "michael9"), ("michael12", "michael18"))
+
+
+@pytest.mark.data
+def test_humans_keep_left_and_right(tosca, tmp_path):
+    from darcyan.cache import ShapeCache
+    from darcyan.evaluation import read_vts
+    from darcyan.mesh import load_mesh
+    from scipy.spatial import cKDTree
+
+    folder = tosca / "tosca-5k"
+    cache = ShapeCache(tmp_path / "cache")
+    correct = total = 0
+    for a, b in HUMAN_PAIRS:
+        shape_1, shape_2 = (describe_shape(folder / f"{name}.off", DarcyanConfig(), cache=cache) for name in (a, b))
+        matches = match_shapes(shape_1, shape_2)
+        mesh_1, mesh_2 = load_mesh(folder / f"{a}.off"), load_mesh(folder / f"{b}.off")
+        vts_1, vts_2 = read_vts(folder / "corres" / f"{a}.vts"), read_vts(folder / "corres" / f"{b}.vts")
+        line = cKDTree(mesh_1.vertices[vts_1]).query(mesh_1.vertices[matches.source_vertex])[1]
+        error = np.linalg.norm(mesh_2.vertices[vts_2[line]] - mesh_2.vertices[matches.target_vertex], axis=1)
+        # Euclidean error against a hand's length: a swapped hand or foot is ~10x farther.
+        correct += int((error < 0.1 * np.sqrt(mesh_2.area())).sum())
+        total += len(matches)
+    assert total >= 20 and correct / total >= 0.9, (correct, total)
