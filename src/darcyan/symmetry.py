@@ -84,27 +84,29 @@ def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2:
 
 
 def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface, landmarks_1: np.ndarray,
-                          landmarks_2: np.ndarray, seed: int = 0) -> float:
+                          landmarks_2: np.ndarray, seed: int = 0, samples: int = SAMPLES,
+                          neighbours: int = NEIGHBOURS, signature_weight: float = SIGNATURE_WEIGHT) -> float:
     """In [-1, 1]: +1 when the correspondence ``landmarks_1[i] <-> landmarks_2[i]`` (indices into
     the feature sets) preserves orientation everywhere, -1 when it is a mirror image; 0 when
-    fewer than 3 landmarks make the test meaningless."""
+    fewer than 3 landmarks make the test meaningless. ``samples``, ``neighbours`` and
+    ``signature_weight`` default to the module's constants (see there)."""
     if len(landmarks_1) < 3:
         return 0.0
     n1 = len(surface_1.points)
     rng = np.random.default_rng(seed)
-    samples = rng.choice(n1, size=min(SAMPLES, n1), replace=False)
+    samples = rng.choice(n1, size=min(samples, n1), replace=False)
     embed_1 = surface_1.landmark_distances[landmarks_1][:, samples].T  # (s, m)
     embed_2 = surface_2.landmark_distances[landmarks_2].T  # (n2, m)
     if surface_1.signature is not None and surface_2.signature is not None:
-        embed_1 = np.hstack([embed_1, SIGNATURE_WEIGHT * surface_1.signature[samples]])
-        embed_2 = np.hstack([embed_2, SIGNATURE_WEIGHT * surface_2.signature])
+        embed_1 = np.hstack([embed_1, signature_weight * surface_1.signature[samples]])
+        embed_2 = np.hstack([embed_2, signature_weight * surface_2.signature])
     image = cKDTree(embed_2).query(embed_1)[1]  # each sample's image on shape 2
     x = surface_1.points[samples]
-    neighbours = cKDTree(x).query(x, k=min(NEIGHBOURS, len(samples) - 1) + 1)[1][:, 1:]
+    near = cKDTree(x).query(x, k=min(neighbours, len(samples) - 1) + 1)[1][:, 1:]
     p = np.arange(len(samples))
     votes = []
-    for i, j in zip(*np.triu_indices(neighbours.shape[1], k=1)):
-        q, r = neighbours[:, i], neighbours[:, j]
+    for i, j in zip(*np.triu_indices(near.shape[1], k=1)):
+        q, r = near[:, i], near[:, j]
         s1 = _corner_sine(x, surface_1.normals[samples], p, q, r)
         s2 = _corner_sine(surface_2.points[image], surface_2.normals[image], p, q, r)
         ok = (np.abs(s1) >= MIN_SINE) & (np.abs(s2) >= MIN_SINE)
