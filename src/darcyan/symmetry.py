@@ -24,6 +24,7 @@ from scipy.spatial import cKDTree
 # and one triangle per sample, 165 of the 203 test pairs got their true matching; with these, 190.
 SAMPLES = 800
 NEIGHBOURS = 6
+TARGET_POINTS = 10_000
 # A triangle votes only when it is far from degenerate on both shapes (|sin| of its corner).
 MIN_SINE = 0.3
 # Diffusion lengths (sqrt(area) units) of the mean curvature making up the point signature, and
@@ -96,11 +97,15 @@ def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface
     rng = np.random.default_rng(seed)
     samples = rng.choice(n1, size=min(samples, n1), replace=False)
     embed_1 = surface_1.landmark_distances[landmarks_1][:, samples].T  # (s, m)
-    embed_2 = surface_2.landmark_distances[landmarks_2].T  # (n2, m)
+    n2 = len(surface_2.points)
+    # Images are looked for among at most TARGET_POINTS vertices: far finer than the test
+    # triangles, and a 52k-vertex target costs no more than a 10k one.
+    targets = np.sort(rng.choice(n2, size=TARGET_POINTS, replace=False)) if n2 > TARGET_POINTS else np.arange(n2)
+    embed_2 = surface_2.landmark_distances[landmarks_2][:, targets].T  # (t, m)
     if surface_1.signature is not None and surface_2.signature is not None:
         embed_1 = np.hstack([embed_1, signature_weight * surface_1.signature[samples]])
-        embed_2 = np.hstack([embed_2, signature_weight * surface_2.signature])
-    image = cKDTree(embed_2).query(embed_1)[1]  # each sample's image on shape 2
+        embed_2 = np.hstack([embed_2, signature_weight * surface_2.signature[targets]])
+    image = targets[cKDTree(embed_2).query(embed_1)[1]]  # each sample's image on shape 2
     x = surface_1.points[samples]
     near = cKDTree(x).query(x, k=min(neighbours, len(samples) - 1) + 1)[1][:, 1:]
     p = np.arange(len(samples))
