@@ -54,7 +54,11 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("dataset")
     parser.add_argument("--pairs")
+    parser.add_argument("--settings", nargs="*", metavar="SAMPLES,NEIGHBOURS,WEIGHT",
+                        help="settings to try instead of the built-in list, e.g. 800,6,0.9")
     args = parser.parse_args(argv)
+    settings = SETTINGS if not args.settings else [
+        (int(a), int(b), float(c)) for a, b, c in (item.split(",") for item in args.settings)]
     root = Path(args.dataset)
     dataset = discover_dataset(root)
     pairs = read_pairs(args.pairs, dataset) if args.pairs else default_pairs(dataset)
@@ -68,7 +72,7 @@ def main(argv=None) -> int:
     print("| samples | neighbours | signature weight | " + " | ".join(classes) + " | all |")
     print("| ---: | ---: | ---: | " + " | ".join("---:" for _ in classes) + " | ---: |")
     default = (symmetry.SAMPLES, symmetry.NEIGHBOURS, symmetry.SIGNATURE_WEIGHT)
-    for samples, neighbours, weight in SETTINGS:
+    for samples, neighbours, weight in settings:
         won, count = defaultdict(int), defaultdict(int)
         for cls, d1, d2, candidates, truth in cases:
             best, best_total = None, -np.inf
