@@ -119,8 +119,12 @@ def plot(rows: list, out: Path) -> None:
         print("matplotlib not installed: no plots", file=sys.stderr)
         return
     names = sorted({r["param"] for r in rows})
-    fig, axes = plt.subplots(1, len(names), figsize=(3.2 * len(names), 3.0), squeeze=False)
-    for ax, name in zip(axes[0], names):
+    columns = min(4, len(names))
+    lines = -(-len(names) // columns)
+    fig, axes = plt.subplots(lines, columns, figsize=(3.2 * columns, 2.8 * lines), squeeze=False)
+    for ax in axes.ravel()[len(names):]:
+        ax.set_visible(False)
+    for ax, name in zip(axes.ravel(), names):
         for matching, style in zip(MATCHINGS, ("-o", "--s")):
             sel = sorted((r for r in rows if r["param"] == name and r["matching"] == matching), key=lambda r: r["value"])
             ax.plot([r["value"] for r in sel], [r["rate_per_feature"] for r in sel], style, label=matching)
@@ -130,7 +134,8 @@ def plot(rows: list, out: Path) -> None:
         ax.set_title(name, fontsize=9)
         ax.set_ylim(0, 1)
         ax.grid(alpha=0.3)
-    axes[0][0].set_ylabel("strict rate per source feature")
+    for row in axes:
+        row[0].set_ylabel("strict rate per source feature")
     axes[0][0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out / "sweep.png", dpi=110)
