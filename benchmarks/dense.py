@@ -8,7 +8,8 @@ the truth, the mean error (geodesic / sqrt(area)) and the seconds taken:
   (the time of the dense stage and of the whole run are reported apart);
 - pyFM (``pip install pyfmaps``, optional): WKS descriptors, a 50 x 50 functional map with
   Laplacian and descriptor commutativity, ZoomOut from 50 to 200 (its README's pipeline),
-  without darcyan's landmarks.
+  without darcyan's landmarks (:func:`darcyan.dense.pyfm_own_map`, also behind
+  ``darcyan bench --dense``).
 
     python benchmarks/dense.py cat0:cat1 wolf0:wolf1 [--no-pyfm] [--data ../shared/data]
 
@@ -22,34 +23,12 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from darcyan import DarcyanConfig
-from darcyan.dense import DenseConfig, dense_map, evaluate_dense
+from darcyan.dense import DenseConfig, dense_map, evaluate_dense_maps, pyfm_own_map
 from darcyan.mesh import load_mesh
 from darcyan.pipeline import analyze_mesh, match_shapes
 
 REPO = Path(__file__).resolve().parents[1]
-PYFM_BASIS, PYFM_FINAL_BASIS, PYFM_ZOOMOUT_STEP = 50, 200, 10
-PYFM_DESCRIPTORS, PYFM_SUBSAMPLE_STEP = 100, 5
-
-
-def pyfm_map(source_file: Path, target_file: Path) -> np.ndarray:
-    """pyFM's WKS + functional map + ZoomOut: a target vertex per source vertex (file numbering)."""
-    from pyFM.functional import FunctionalMapping
-    from pyFM.mesh import TriMesh
-
-    source, target = load_mesh(source_file), load_mesh(target_file)
-    # pyFM's p2p_21 gives a vertex of mesh1 for every vertex of mesh2: mesh1 = target.
-    mesh1 = TriMesh(target.vertices, target.faces, area_normalize=True, center=True)
-    mesh2 = TriMesh(source.vertices, source.faces, area_normalize=True, center=True)
-    model = FunctionalMapping(mesh1, mesh2)
-    model.preprocess(n_descr=PYFM_DESCRIPTORS, descr_type="WKS", subsample_step=PYFM_SUBSAMPLE_STEP,
-                     k_process=PYFM_FINAL_BASIS)
-    model.fit(K=(PYFM_BASIS, PYFM_BASIS), w_descr=1e0, w_lap=1e-2, w_dcomm=1e-1)
-    steps = (PYFM_FINAL_BASIS - PYFM_BASIS) // PYFM_ZOOMOUT_STEP
-    refined = model.zoomout_refine(nit=steps, step=PYFM_ZOOMOUT_STEP)
-    return np.asarray(model.get_p2p(refined), dtype=np.int64)
 
 
 def main(argv=None) -> int:
@@ -71,16 +50,17 @@ def main(argv=None) -> int:
         t = time.perf_counter()
         result = dense_map(shape_1, shape_2, correspondence, DenseConfig())
         dense_s, total_s = time.perf_counter() - t, time.perf_counter() - start
-        score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=args.sample,
-                               target_solver=shape_2.solver)
+        maps = {"darcyan": result.target}
+        if not args.no_pyfm:  # pyFM's own pipeline (darcyan.dense.pyfm_own_map), no darcyan landmarks
+            pyfm = pyfm_own_map(shape_1.mesh, shape_2.mesh, shape_1.n_input_vertices)
+            maps["pyfm"] = pyfm.target
+        scores = evaluate_dense_maps(shape_1.mesh, shape_2.mesh, maps, sample=args.sample,
+                                     target_solver=shape_2.solver)
+        score = scores["darcyan"]
         print(f"{a}->{b} | darcyan | {score.rate:.3f} | {score.mean:.4f} | {dense_s:.1f} | {total_s:.1f} | "
               f"{len(result.landmarks)} of {len(correspondence)} matches", flush=True)
         if not args.no_pyfm:
-            t = time.perf_counter()
-            target = pyfm_map(*files)
-            pyfm_s = time.perf_counter() - t
-            score = evaluate_dense(shape_1.mesh, shape_2.mesh, target, sample=args.sample,
-                                   target_solver=shape_2.solver)
+            score, pyfm_s = scores["pyfm"], pyfm.timings["pyfm"]
             print(f"{a}->{b} | pyFM WKS+ZoomOut | {score.rate:.3f} | {score.mean:.4f} | {pyfm_s:.1f} | "
                   f"{pyfm_s:.1f} | -", flush=True)
     return 0

@@ -23,6 +23,19 @@ by file content and parameters) and per-pair work (matching and scoring; all met
 share the target's distance fields). Each finished pair is appended to ``pairs.jsonl`` in the
 output folder at once, and the summaries (``results.json``, ``pairs.csv``, ``report.md``) are
 rewritten as pairs finish, so an interrupted run loses nothing and ``resume`` skips what is done.
+
+With ``dense=True`` (``darcyan bench --dense``) each pair also gets dense maps, scored on a fixed
+random sample of source vertices (``dense_samples``, default 1000, ``numpy.random.default_rng(0)``,
+the same vertices for every method; for vts data the sample is drawn among the listed
+``corres/*.vts`` samples, whose correspondents are exact) with the same metric:
+
+- ``darcyan``: :func:`darcyan.dense.dense_map` (default :class:`~darcyan.dense.DenseConfig`)
+  seeded by darcyan's sparse matches;
+- ``pyfm`` (when ``pyfm`` is among the methods): pyFM's own pipeline without darcyan's landmarks
+  (:func:`darcyan.dense.pyfm_own_map`: WKS, a 50 x 50 functional map, ZoomOut to 200).
+
+They go to ``results.json`` under ``dense.<method>.overall|classes|pairs``, a section of
+``report.md`` and ``dense_curve.png``.
 """
 
 from __future__ import annotations
@@ -43,10 +56,13 @@ import numpy as np
 from .cache import ShapeCache, file_digest
 from .config import DarcyanConfig
 from .errors import DarcyanError, MeshError, require
+from .dense import DENSE_SAMPLE, DENSE_SEED
 from .evaluation import (CURVE_TAUS, DEFAULT_THRESHOLD, input_to_mesh_index, mirror_agreement,
                          nearest_samples, read_vts, reflection_symmetry, score_pair, summarize)
 
 METHODS = ("darcyan", "hks", "wks", "pyfm")
+DENSE_METHODS = ("darcyan", "pyfm")  # dense maps of --dense (pyfm only when it is among the methods)
+DENSE = "dense"  # the "kind" of a dense record in the journal (sparse records have no kind)
 MESH_SUFFIXES = (".off", ".ply", ".obj")
 TRUTH_FOLDER = "corres"
 BENCH_CACHE_FORMAT = "bench-1"  # bump when what the bench caches per shape changes
@@ -60,6 +76,14 @@ RATE_DEFINITION = (
     "matching every source feature point gets one match); 'all' pools every match of the run; 'mean over classes' is the unweighted mean "
     "of the class rates (the paper's Fig. 8 reports one rate per class). recall = correct / source "
     "feature points: it differs from the rate only when a matcher leaves feature points unmatched.")
+DENSE_DEFINITION = (
+    "Dense maps: each method maps every source vertex; per pair a fixed random sample of source vertices "
+    "(numpy.random.default_rng(seed), the same vertices for every method; with vts ground truth drawn among the "
+    "listed corres/*.vts samples, whose correspondents are exact; with identity ground truth among all vertices) "
+    "is scored by geodesic error / sqrt(target area). rate = sampled vertices within the threshold / sampled "
+    "vertices, pooled over the pairs (a pair whose map failed counts as 0 within); mean_error pools the mapped "
+    "samples; seconds = the dense stage only (darcyan: dense_map after the sparse matches; pyfm: its whole "
+    "pipeline, its spectra included).")
 
 JOURNAL = "pairs.jsonl"
 SETTINGS = "run.json"
@@ -169,21 +193,45 @@ class BenchSettings:
     config: DarcyanConfig = field(default_factory=DarcyanConfig)
     laplacian: str = "cotangent"
     repair: bool = False
+    dense: bool = False
+    dense_samples: int = DENSE_SAMPLE
+    dense_seed: int = DENSE_SEED
+
+    @property
+    def dense_methods(self) -> tuple:
+        """The dense maps of a pair: darcyan's, and pyFM's own when ``pyfm`` is a method."""
+        return tuple(m for m in DENSE_METHODS if m == "darcyan" or m in self.methods) if self.dense else ()
+
+    def dense_settings(self) -> dict | None:
+        """What the dense results depend on (``None`` without ``dense``)."""
+        if not self.dense:
+            return None
+        import dataclasses
+
+        from . import dense
+
+        return {"samples": self.dense_samples, "seed": self.dense_seed,
+                "config": dataclasses.asdict(dense.DenseConfig()),
+                "pyfm": {"fmap_size": dense.PYFM_FMAP_SIZE, "final_basis": dense.PYFM_FINAL_BASIS,
+                         "zoomout_step": dense.PYFM_ZOOMOUT_STEP, "descriptors": dense.PYFM_DESCRIPTORS,
+                         "subsample_step": dense.PYFM_SUBSAMPLE_STEP, "weights": dict(dense.PYFM_WEIGHTS)}}
 
     def as_dict(self) -> dict:
         from . import baselines
 
         return {"methods": list(self.methods), "threshold": self.threshold, "config": self.config.as_dict(),
-                "laplacian": self.laplacian, "repair": self.repair,
+                "laplacian": self.laplacian, "repair": self.repair, "dense": self.dense_settings(),
                 "baselines": {"spectrum_size": baselines.SPECTRUM_SIZE,
                               "signature_samples": baselines.SIGNATURE_SAMPLES,
                               "pyfm_spectrum": baselines.PYFM_SPECTRUM, "pyfm_k": baselines.PYFM_K,
                               "pyfm_zoomout_steps": baselines.PYFM_ZOOMOUT_STEPS}}
 
     def comparable(self) -> dict:
-        """The settings that must match for resumed results to be reused (not the method list)."""
+        """The settings that must match for resumed results to be reused (not the method list;
+        the dense settings are compared apart, when both runs have them)."""
         d = self.as_dict()
         d.pop("methods")
+        d.pop("dense")
         return d
 
 
@@ -425,13 +473,20 @@ def _pair_task(job: dict) -> dict:
 
 
 def _pair_work(job: dict) -> list:
+    target = prepared_shape(job["target_path"], job["settings"].repair)
+    records = _sparse_records(job, target) if job["methods"] else []
+    if job.get("dense_methods"):
+        records += _dense_records(job, target)
+    return records
+
+
+def _sparse_records(job: dict, target: _Prepared) -> list:
     from dataclasses import replace
 
     from .pipeline import match_shapes
 
     settings: BenchSettings = job["settings"]
     src, tgt = job["source_rec"], job["target_rec"]
-    target = prepared_shape(job["target_path"], settings.repair)
     features = np.asarray(src["features"], dtype=np.int64)
     truth = job["truth"]
     if truth["kind"] == "identity":
@@ -473,6 +528,69 @@ def _pair_work(job: dict) -> list:
             "errors_sym": _json_floats(score.errors_sym), "repeatable": score.repeatable.tolist(),
             "repeatable_sym": score.repeatable_sym.tolist(), "seconds": seconds})
     return records
+
+
+# A dense map that fails on a pair (too few consistent landmarks, an eigensolver that does not
+# converge) is recorded as failed (none of its samples correct) instead of stopping the run.
+DENSE_FAILURES = (DarcyanError, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError)
+
+
+def _dense_records(job: dict, target: _Prepared) -> list:
+    """The dense maps of one pair (``job["dense_methods"]``), scored on the same sampled vertices."""
+    from dataclasses import replace
+
+    from .dense import UNMAPPED, DenseConfig, dense_map, evaluate_dense_maps, pyfm_own_map
+    from .evaluation import GroundTruth
+    from .pipeline import match_shapes
+
+    settings: BenchSettings = job["settings"]
+    source = prepared_shape(job["source_path"], settings.repair)
+    truth = job["truth"]
+    if truth["kind"] == "identity":
+        ground_truth = GroundTruth()
+    else:
+        ground_truth = GroundTruth(read_vts(truth["source_vts"], source.n_input),
+                                   read_vts(truth["target_vts"], target.n_input))
+    maps, about = {}, {}
+    for method in job["dense_methods"]:
+        start = time.perf_counter()
+        info: dict = {}
+        try:
+            if method == "darcyan":
+                # The cached descriptions, with the prepared meshes and solvers dense_map needs.
+                shape_1 = replace(job["source_rec"]["description"], mesh=source.mesh, solver=source.solver)
+                shape_2 = replace(job["target_rec"]["description"], mesh=target.mesh, solver=target.solver)
+                correspondence = match_shapes(shape_1, shape_2, settings.config)
+                info["matches"] = len(correspondence)
+                start = time.perf_counter()  # the dense stage only
+                result = dense_map(shape_1, shape_2, correspondence, DenseConfig())
+                info["landmarks"] = len(result.landmarks)
+            else:
+                result = pyfm_own_map(source.mesh, target.mesh, source.n_input)
+            maps[method] = result.target
+            info["timings"] = {k: float(v) for k, v in result.timings.items()}
+        except DENSE_FAILURES as exc:
+            maps[method] = np.full(source.n_input, UNMAPPED, dtype=np.int64)
+            info["failed"] = str(exc) if isinstance(exc, DarcyanError) else f"{type(exc).__name__}: {exc}"
+        about[method] = (time.perf_counter() - start, info)
+    scores = evaluate_dense_maps(source.mesh, target.mesh, maps, ground_truth, settings.dense_samples,
+                                 settings.dense_seed, target.solver, settings.threshold)
+    records = []
+    for method, score in scores.items():
+        seconds, info = about[method]
+        errors = score.errors
+        mapped = np.isfinite(errors)
+        records.append({
+            "kind": DENSE, "method": method, "class": job["cls"], "source": job["source"], "target": job["target"],
+            "samples": int(len(errors)), "within": int((errors <= settings.threshold).sum()), "rate": score.rate,
+            "mapped": int(mapped.sum()), "mean_error": float(errors[mapped].mean()) if mapped.any() else None,
+            "curve": score.curve().tolist(), "seconds": seconds, **info})
+    return records
+
+
+def _kind(record: dict) -> str:
+    """``"dense"`` for a dense record of the journal, ``"sparse"`` for the others."""
+    return record.get("kind", "sparse")
 
 
 def _pyfm_map(job: dict, source: _Prepared, target: _Prepared) -> np.ndarray:
@@ -614,13 +732,17 @@ def run_bench(dataset_dir: str | os.PathLike, out: str | os.PathLike, methods=("
               config: DarcyanConfig = DarcyanConfig(), jobs: int = 1, scheduler: str | None = None,
               resume: bool = False, repair: bool = False, laplacian: str = "cotangent",
               cache_dir: str | os.PathLike | None = None, no_cache: bool = False, plots: bool = True,
-              progress: bool = True) -> BenchResult:
+              progress: bool = True, dense: bool = False, dense_samples: int = DENSE_SAMPLE) -> BenchResult:
     """Benchmark ``methods`` on a dataset folder and write the results to ``out``.
 
     Writes ``out/results.json``, ``pairs.csv``, ``report.md`` (as pairs finish), ``pairs.jsonl``
     (one line per finished method x pair), ``run.json`` (the settings) and, with matplotlib,
     ``rates.png`` and ``curve.png`` at the end. ``resume`` keeps the finished pairs of an earlier
     run with the same settings and computes only the others.
+
+    ``dense``: also a dense map per pair (darcyan's, and pyFM's own pipeline when ``pyfm`` is a
+    method), scored on ``dense_samples`` source vertices drawn with seed 0 (see the module
+    docstring); results under ``dense`` in results.json, and ``dense_curve.png``.
     """
     from . import baselines
 
@@ -637,25 +759,29 @@ def run_bench(dataset_dir: str | os.PathLike, out: str | os.PathLike, methods=("
         raise DarcyanError(f"threshold must be in (0, 1) (sqrt(area) units), got {threshold}")
     if jobs < 1:
         raise DarcyanError(f"jobs must be at least 1, got {jobs}")
+    if dense and not (isinstance(dense_samples, (int, np.integer)) and dense_samples >= 1):
+        raise DarcyanError(f"dense samples must be a positive integer, got {dense_samples}")
     dataset = discover_dataset(dataset_dir)
     pairs = read_pairs(pairs_file, dataset) if pairs_file else default_pairs(dataset)
     if not pairs:
         raise DarcyanError(f"{dataset.root}: no pairs (every class has a single shape)")
-    settings = BenchSettings(methods, float(threshold), config, laplacian, repair)
+    settings = BenchSettings(methods, float(threshold), config, laplacian, repair, bool(dense), int(dense_samples))
     out = Path(out)
     journal = _open_run(out, dataset, settings, resume)
     pair_set = set(pairs)
-    done = {(r["method"], r["source"], r["target"]) for r in journal}
-    pending = [(s, t, [m for m in methods if (m, s, t) not in done]) for s, t in pairs]
-    pending = [(s, t, ms) for s, t, ms in pending if ms]
-    reused = sum(1 for r in journal if r["method"] in methods and (r["source"], r["target"]) in pair_set)
+    done = {(_kind(r), r["method"], r["source"], r["target"]) for r in journal}
+    wanted = {"sparse": methods, DENSE: settings.dense_methods}
+    pending = [(s, t, [m for m in methods if ("sparse", m, s, t) not in done],
+                [m for m in settings.dense_methods if (DENSE, m, s, t) not in done]) for s, t in pairs]
+    pending = [(s, t, ms, ds) for s, t, ms, ds in pending if ms or ds]
+    reused = sum(1 for r in journal if r["method"] in wanted[_kind(r)] and (r["source"], r["target"]) in pair_set)
     common = {"settings": settings, "cache_dir": None if cache_dir is None else str(cache_dir), "no_cache": no_cache}
     cache = None if no_cache else ShapeCache(cache_dir)
     info = _load_info(out)
     info.setdefault("mirror", {})
 
     # Phase 1: per-shape work.
-    names = sorted({n for s, t, _ in pending for n in (s, t)}, key=_pose_key)
+    names = sorted({n for s, t, _, _ in pending for n in (s, t)}, key=_pose_key)
     shape_tasks = [dict(common, name=n, path=str(dataset.shapes[n]),
                         vts=str(dataset.vts(n)) if dataset.truth == "vts" else None) for n in names]
     shapes: dict = {}
@@ -667,8 +793,8 @@ def run_bench(dataset_dir: str | os.PathLike, out: str | os.PathLike, methods=("
         bar.update()
 
     # Ground truth: identity needs equal vertex counts; mirror maps per class.
-    classes = sorted({shape_class(s) for s, _, _ in pending})
-    for s, t, _ in pending:
+    classes = sorted({shape_class(s) for s, _, _, _ in pending})
+    for s, t, _, _ in pending:
         if dataset.truth == "identity" and shapes[s]["n_input_vertices"] != shapes[t]["n_input_vertices"]:
             raise DarcyanError(f"{dataset.shapes[s]} and {dataset.shapes[t]}: identity ground truth needs the same "
                                f"vertex count ({shapes[s]['n_input_vertices']} vs {shapes[t]['n_input_vertices']}); "
@@ -687,13 +813,14 @@ def run_bench(dataset_dir: str | os.PathLike, out: str | os.PathLike, methods=("
 
     # Phase 2: per-pair work, grouped by target so each worker reuses its prepared target.
     pair_jobs = []
-    for s, t, ms in sorted(pending, key=lambda p: (_pose_key(p[1]), _pose_key(p[0]))):
+    for s, t, ms, ds in sorted(pending, key=lambda p: (_pose_key(p[1]), _pose_key(p[0]))):
         if dataset.truth == "identity":
             truth = {"kind": "identity", "mirror": mirrors.get(shape_class(s))}
         else:
             sym = dataset.vts(t, mirror=True)
-            truth = {"kind": "vts", "target_vts": str(dataset.vts(t)), "target_sym": str(sym) if sym.is_file() else None}
-        pair_jobs.append(dict(common, source=s, target=t, cls=shape_class(s), methods=ms,
+            truth = {"kind": "vts", "target_vts": str(dataset.vts(t)), "target_sym": str(sym) if sym.is_file() else None,
+                     "source_vts": str(dataset.vts(s))}
+        pair_jobs.append(dict(common, source=s, target=t, cls=shape_class(s), methods=ms, dense_methods=ds,
                               source_path=str(dataset.shapes[s]), target_path=str(dataset.shapes[t]),
                               source_rec=_slim(shapes[s]), target_rec=_slim(shapes[t]), truth=truth))
     computed = 0
@@ -742,6 +869,13 @@ def _open_run(out: Path, dataset: Dataset, settings: BenchSettings, resume: bool
                                    or info.get("dataset") != str(dataset.root.resolve())):
             raise DarcyanError(f"{out}: the results there were made with other settings or another dataset; "
                                f"use another --out, or run without --resume to start again")
+        earlier_dense = (before or {}).get("dense")
+        now_dense = json.loads(json.dumps(settings.dense_settings()))
+        if earlier_dense and now_dense and earlier_dense != now_dense:
+            raise DarcyanError(f"{out}: the dense results there were made with other dense settings "
+                               f"({earlier_dense['samples']} samples, seed {earlier_dense['seed']}); use another "
+                               f"--out, or run without --resume to start again")
+        dense_settings = now_dense or earlier_dense
         text = journal_path.read_text()
         if text and not text.endswith("\n"):  # a line cut by an interruption: drop it
             text = text[: text.rfind("\n") + 1]
@@ -753,12 +887,14 @@ def _open_run(out: Path, dataset: Dataset, settings: BenchSettings, resume: bool
                 continue
         methods = tuple(dict.fromkeys(list(before["methods"] if before else []) + list(settings.methods)))
     else:
+        dense_settings = settings.dense_settings()
         if journal_path.exists():
             journal_path.unlink()
         methods = settings.methods
     journal_path.touch()
     stored = settings.as_dict()
     stored["methods"] = list(methods)
+    stored["dense"] = dense_settings
     info = {"dataset": str(dataset.root.resolve()), "ground_truth": dataset.truth, "settings": stored,
             "mirror": info.get("mirror", {})}
     _save_json(out / SETTINGS, info)
@@ -822,6 +958,40 @@ def summarize_records(records: list, threshold: float) -> dict:
     return methods
 
 
+def summarize_dense(records: list) -> dict:
+    """``{method: {"overall", "classes": {class: ...}, "pairs": [...]}}`` from dense pair records.
+
+    Per class and overall: ``pairs``, ``failed`` (pairs without a map), ``samples``, ``within``,
+    ``rate`` (within / samples, pooled), ``mean_error`` (over the mapped samples), ``curve``
+    (pooled cumulative curve over ``CURVE_TAUS``), ``seconds`` (sum of the dense stages) and
+    ``seconds_per_pair``; overall also ``rate_class_mean``.
+    """
+    by_method: dict = {}
+    for r in records:
+        by_method.setdefault(r["method"], []).append(r)
+    out = {}
+    for method in [m for m in DENSE_METHODS if m in by_method] + sorted(set(by_method) - set(DENSE_METHODS)):
+        rows = by_method[method]
+        classes = {cls: _pool_dense([r for r in rows if r["class"] == cls]) for cls in sorted({r["class"] for r in rows})}
+        overall = _pool_dense(rows)
+        overall["rate_class_mean"] = float(np.mean([c["rate"] for c in classes.values()])) if classes else None
+        out[method] = {"overall": overall, "classes": classes, "pairs": rows}
+    return out
+
+
+def _pool_dense(rows: list) -> dict:
+    samples = sum(r["samples"] for r in rows)
+    within = sum(r["within"] for r in rows)
+    mapped = sum(r["mapped"] for r in rows)
+    error_sum = sum(r["mean_error"] * r["mapped"] for r in rows if r["mapped"])
+    curve = sum(np.asarray(r["curve"]) * r["samples"] for r in rows) / samples if samples else np.zeros(len(CURVE_TAUS))
+    seconds = float(sum(r["seconds"] for r in rows))
+    return {"pairs": len(rows), "failed": sum(1 for r in rows if r.get("failed")), "samples": samples,
+            "within": within, "rate": within / samples if samples else None,
+            "mean_error": error_sum / mapped if mapped else None, "curve": np.asarray(curve).tolist(),
+            "seconds": seconds, "seconds_per_pair": seconds / len(rows) if rows else None}
+
+
 def write_outputs(out: Path, dataset: Dataset, settings: BenchSettings, info: dict, journal: list, pairs: list,
                   wall_seconds: float) -> dict:
     """Rewrite results.json, pairs.csv and report.md from the journal (the pairs of this run)."""
@@ -830,12 +1000,17 @@ def write_outputs(out: Path, dataset: Dataset, settings: BenchSettings, info: di
     order = {p: i for i, p in enumerate(pairs)}
     method_order = {m: i for i, m in enumerate(METHODS)}
     records.sort(key=lambda r: (method_order.get(r["method"], len(METHODS)), order[(r["source"], r["target"])]))
+    dense = [r for r in records if _kind(r) == DENSE]
+    records = [r for r in records if _kind(r) != DENSE]
     results = {
         "dataset": str(dataset.root.resolve()), "ground_truth": dataset.truth, "threshold": settings.threshold,
         "taus": CURVE_TAUS.tolist(), "settings": info.get("settings", settings.as_dict()),
         "rate_definition": RATE_DEFINITION, "mirror": info.get("mirror", {}), "pairs_expected": len(pairs),
         "wall_seconds": wall_seconds, "methods": summarize_records(records, settings.threshold), "pairs": records,
     }
+    if dense or settings.dense:
+        results["dense_definition"] = DENSE_DEFINITION
+        results["dense"] = summarize_dense(dense)
     _write_atomic(out / "results.json", json.dumps(results, indent=None, separators=(",", ":")))
     _write_atomic(out / "pairs.csv", pairs_csv(records, settings.threshold))
     _write_atomic(out / "report.md", report_markdown(results))
@@ -916,6 +1091,7 @@ def report_markdown(results: dict) -> str:
                          f"{_fmt(m['overall']['recall_sym_class_mean'])}, repeatability "
                          f"{_fmt(m['overall']['repeatability_class_mean'])}. 'seconds' is the per-pair matching "
                          f"time (for pyfm the whole functional-map pipeline; per-shape work is cached and not counted).")
+    lines += _dense_report(results)
     mirror = results.get("mirror", {})
     if mirror:
         lines += ["", "## Mirror ground truth", ""]
@@ -940,20 +1116,56 @@ def report_markdown(results: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _dense_report(results: dict) -> list:
+    """The report's section on dense maps (none when the run has no dense results)."""
+    dense = results.get("dense")
+    if dense is None:
+        return []
+    chosen = (results.get("settings") or {}).get("dense") or {}
+    lines = ["", f"## Dense maps: within {results['threshold']} / mean error / seconds per pair", ""]
+    lines.append(f"{chosen.get('samples', '?')} source vertices per pair (seed {chosen.get('seed', '?')}). "
+                 "darcyan: the dense map seeded by darcyan's sparse matches (geodesic landmark coordinates "
+                 "refined by ZoomOut); pyfm: pyFM's own pipeline (WKS, 50 x 50 functional map, ZoomOut to "
+                 "200) without darcyan's landmarks. " + results.get("dense_definition", DENSE_DEFINITION))
+    if not dense:
+        return lines + ["", "No dense results yet."]
+    methods = list(dense)
+    lines += ["", "| class | " + " | ".join(methods) + " |", "| --- |" + " --- |" * len(methods)]
+
+    def cell(c):
+        if c is None:
+            return ""
+        failed = f" ({c['failed']} failed)" if c["failed"] else ""
+        return f"{_pct(c['rate'])} / {_fmt(c['mean_error'])} / {c['seconds_per_pair']:.1f} s{failed}"
+
+    for cls in sorted({c for m in dense.values() for c in m["classes"]}):
+        lines.append(f"| {cls} | " + " | ".join(cell(dense[m]["classes"].get(cls)) for m in methods) + " |")
+    lines.append("| **mean over classes** | " + " | ".join(_pct(dense[m]["overall"]["rate_class_mean"])
+                                                          for m in methods) + " |")
+    lines.append("| **all samples pooled** | " + " | ".join(cell(dense[m]["overall"]) for m in methods) + " |")
+    lines.append("| pairs / samples | " + " | ".join(f"{dense[m]['overall']['pairs']} / {dense[m]['overall']['samples']}"
+                                                     for m in methods) + " |")
+    return lines
+
+
 # ---------------------------------------------------------------------------------------------
 # Plots (matplotlib optional)
 
 
 def write_plots(results: dict, out: Path) -> list:
-    """rates.png and curve.png in ``out``; nothing (and a note on stderr) without matplotlib."""
+    """rates.png and curve.png (and dense_curve.png with dense results) in ``out``; nothing (and
+    a note on stderr) without matplotlib."""
     try:
         import matplotlib  # noqa: F401
     except ImportError:
         print("darcyan: note: rates.png and curve.png need matplotlib: pip install 'darcyan[plot]'", file=sys.stderr)
         return []
-    if not results["methods"]:
-        return []
-    return [plot_rates(results, out / "rates.png"), plot_curves(results, out / "curve.png")]
+    written = []
+    if results["methods"]:
+        written += [plot_rates(results, out / "rates.png"), plot_curves(results, out / "curve.png")]
+    if results.get("dense"):
+        written.append(plot_dense_curves(results, out / "dense_curve.png"))
+    return written
 
 
 def plot_rates(results: dict, path: Path) -> Path:
@@ -1003,6 +1215,31 @@ def plot_curves(results: dict, path: Path) -> Path:
         ax.set_xlabel("geodesic error / sqrt(area)")
         ax.set_ylabel("matches with error <= threshold (%)")
         ax.set_title(f"{Path(results['dataset']).name}: cumulative error")
+        ax.legend(fontsize="small", loc="lower right")
+        style.save(fig, path)
+    return path
+
+
+def plot_dense_curves(results: dict, path: Path) -> Path:
+    """Cumulative curve of the dense maps, one line per method: share of the sampled source
+    vertices with error <= tau, pooled over the pairs."""
+    from . import style
+
+    taus = np.asarray(results["taus"])
+    samples = ((results.get("settings") or {}).get("dense") or {}).get("samples")
+    with style.context():
+        fig, ax = style.figure()
+        for name, m in results["dense"].items():
+            o = m["overall"]
+            ax.plot(taus, np.asarray(o["curve"]) * 100, color=style.method_colour(name),
+                    label=f"{name} ({_pct(o['rate'])} within {results['threshold']}, {o['pairs']} pairs)")
+        ax.axvline(results["threshold"], color=style.NEUTRAL["edge"], linewidth=0.8, linestyle=":")
+        ax.set_xlim(taus[0], taus[-1])
+        ax.set_ylim(0, 100)
+        ax.set_xlabel("geodesic error / sqrt(area)")
+        ax.set_ylabel("sampled source vertices with error <= threshold (%)")
+        ax.set_title(f"{Path(results['dataset']).name}: dense maps, cumulative error"
+                     + (f" ({samples} vertices per pair)" if samples else ""))
         ax.legend(fontsize="small", loc="lower right")
         style.save(fig, path)
     return path

@@ -206,7 +206,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     result = run_bench(args.dataset, args.out, methods=args.method, pairs_file=args.pairs, threshold=args.threshold,
                        config=_config(args), jobs=args.jobs, scheduler=args.scheduler, resume=args.resume,
                        repair=args.repair, laplacian=args.laplacian, no_cache=args.no_cache,
-                       progress=not args.quiet)
+                       progress=not args.quiet, dense=args.dense, dense_samples=args.dense_samples)
     if not args.quiet:
         print(report_markdown(result.results))
     print(f"darcyan: {result.computed} method x pair results computed, {result.reused} reused; "
@@ -278,13 +278,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_demo)
 
     from .bench import METHODS
+    from .dense import DENSE_SAMPLE, DENSE_SEED
     from .evaluation import DEFAULT_THRESHOLD
 
     p = sub.add_parser("bench", help="correspondence rates on a dataset folder, darcyan and baselines side by side",
                        description="Match every ordered pair within each class of DATASET_DIR ({class}{pose}.off|ply|obj; "
                                    "ground truth corres/{shape}.vts, else the identity on vertex indices) with each "
                                    "method at darcyan's feature points, and write results.json, pairs.csv, "
-                                   "report.md, rates.png and curve.png to --out.")
+                                   "report.md, rates.png and curve.png to --out (with --dense also dense maps, "
+                                   "scored on sampled source vertices, and dense_curve.png).")
     p.add_argument("dataset", metavar="DATASET_DIR", help="folder of meshes named {class}{pose}")
     p.add_argument("--pairs", metavar="FILE", help="tab-separated 'source<TAB>target' lines (default: every ordered pair within a class)")
     p.add_argument("--method", nargs="+", choices=METHODS, default=["darcyan"], help="methods to evaluate (default darcyan)")
@@ -293,6 +295,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--jobs", type=int, default=1, help="local worker processes (default %(default)s)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on a dask.distributed scheduler (pip install 'darcyan[dask]')")
     p.add_argument("--resume", action="store_true", help="keep the finished pairs in --out and compute only the others")
+    p.add_argument("--dense", action="store_true", help="also score dense maps per pair: darcyan's (seeded by its "
+                   "sparse matches) and, when pyfm is a --method, pyFM's own pipeline without darcyan's landmarks; "
+                   "cumulative curve in dense_curve.png, results under 'dense' in results.json")
+    p.add_argument("--dense-samples", type=int, default=DENSE_SAMPLE, metavar="N",
+                   help=f"source vertices scored per pair with --dense, drawn at random with seed {DENSE_SEED} "
+                        "(among the listed corres/*.vts samples for vts data) (default %(default)s)")
     p.add_argument("--laplacian", choices=("cotangent", "robust"), default="cotangent", help="Laplace-Beltrami operator of hks/wks (default %(default)s)")
     p.add_argument("--matching", choices=MATCHING_MODES, help=f"descriptor matching of darcyan/hks/wks (default {DarcyanConfig().matching})")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no table on stdout")

@@ -19,7 +19,9 @@ Memory stays O(V): the functional maps are k x k, nearest neighbours are searche
 tree (few dimensions) or by chunks of source rows (spectral dimensions).
 
 :func:`evaluate_dense` scores a dense map against ground truth on a fixed random sample of
-source vertices with the standard geodesic error (see :mod:`darcyan.evaluation`).
+source vertices with the standard geodesic error (see :mod:`darcyan.evaluation`);
+:func:`pyfm_own_map` is pyFM's own pipeline without darcyan's landmarks, the baseline of
+``darcyan bench --dense``.
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ from scipy.spatial import cKDTree
 
 from .curvature import cotangent_laplacian, mixed_voronoi_area
 from .errors import ConfigError, DarcyanError, require
-from .evaluation import DEFAULT_THRESHOLD, GroundTruth, cumulative_curve, geodesic_errors
+from .evaluation import DEFAULT_THRESHOLD, GroundTruth, cumulative_curve
 from .geodesics import GeodesicSolver
 from .mesh import Mesh
 
@@ -52,6 +54,7 @@ NN_CHUNK_BYTES = 128 * 2**20
 # Shift of the shift-invert eigen solver (just below the zero eigenvalue of the Laplacian).
 EIGSH_SHIFT = -1e-8
 DENSE_SAMPLE = 1000  # source vertices scored by evaluate_dense
+DENSE_SEED = 0  # its numpy.random.default_rng seed
 MIN_LANDMARKS = 3
 # Consistent landmark sets: exact maximum-clique search up to this many matches, greedy above.
 MAX_EXHAUSTIVE_LANDMARKS = 24
@@ -320,22 +323,42 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     return c_12, c_21
 
 
-def pyfm_map(mesh_1: Mesh, mesh_2: Mesh, landmarks_1: np.ndarray, landmarks_2: np.ndarray) -> np.ndarray:
+def pyfm_map(mesh_1: Mesh, mesh_2: Mesh, landmarks_1: np.ndarray | None = None,
+             landmarks_2: np.ndarray | None = None) -> np.ndarray:
     """``(n1,)`` vertices of ``mesh_2`` for the vertices of ``mesh_1`` by pyFM (optional extra
-    ``pyfm``): WKS and landmark WKS descriptors, a functional map of size
-    :data:`PYFM_FMAP_SIZE`, ZoomOut up to :data:`PYFM_FINAL_BASIS`. ``landmarks_i (k,)`` local
-    vertex indices, pairwise corresponding."""
+    ``pyfm``): WKS descriptors (plus landmark WKS when landmarks are given), a functional map of
+    size :data:`PYFM_FMAP_SIZE` fitted with Laplacian and descriptor commutativity, ZoomOut up to
+    :data:`PYFM_FINAL_BASIS`. ``landmarks_i (k,)`` local vertex indices, pairwise corresponding;
+    without them this is pyFM's own pipeline (its README's). Both meshes area 1 (as analysed)."""
     functional = require("pyFM.functional", "pyfm")
     trimesh = require("pyFM.mesh", "pyfm")
     # pyFM's map goes from its second mesh to its first: the target is mesh 1 there.
     model = functional.FunctionalMapping(trimesh.TriMesh(mesh_2.vertices, mesh_2.faces),
                                          trimesh.TriMesh(mesh_1.vertices, mesh_1.faces))
+    extra = {}
+    if landmarks_1 is not None:
+        extra["landmarks"] = np.stack([landmarks_2, landmarks_1], axis=1)
     model.preprocess(n_descr=PYFM_DESCRIPTORS, descr_type="WKS", subsample_step=PYFM_SUBSAMPLE_STEP,
-                     k_process=PYFM_FINAL_BASIS, landmarks=np.stack([landmarks_2, landmarks_1], axis=1))
+                     k_process=PYFM_FINAL_BASIS, **extra)
     model.fit(K=(PYFM_FMAP_SIZE, PYFM_FMAP_SIZE), **PYFM_WEIGHTS)
     refined = model.zoomout_refine(nit=(PYFM_FINAL_BASIS - PYFM_FMAP_SIZE) // PYFM_ZOOMOUT_STEP,
                                    step=PYFM_ZOOMOUT_STEP)
     return np.asarray(model.get_p2p(refined), dtype=np.int64)
+
+
+def pyfm_own_map(mesh_1: Mesh, mesh_2: Mesh, n_input_vertices: int | None = None) -> DenseMap:
+    """pyFM's own dense pipeline between two analysed meshes, *without* darcyan's landmarks (the
+    baseline of ``darcyan bench --dense``): :func:`pyfm_map` with no landmarks.
+
+    ``mesh_i``: prepared, area-1 meshes (``ShapeDescription.mesh``); ``n_input_vertices``: of
+    the source file (default: from ``mesh_1.input_index``). Returns a :class:`DenseMap` in input
+    numbering like :func:`dense_map` (no landmarks; ``timings["pyfm"]``: the whole pipeline)."""
+    t = time.perf_counter()
+    local = pyfm_map(mesh_1, mesh_2)
+    n_input = int(mesh_1.input_index.max()) + 1 if n_input_vertices is None else n_input_vertices
+    target = np.full(n_input, UNMAPPED, dtype=np.int64)
+    target[mesh_1.input_index] = mesh_2.input_index[local]
+    return DenseMap(target, np.zeros((0, 2), dtype=np.int64), {"pyfm": time.perf_counter() - t})
 
 
 def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig(),
@@ -444,7 +467,7 @@ class DenseEvaluation:
 
 
 def evaluate_dense(source_mesh: Mesh, target_mesh: Mesh, target: np.ndarray, truth: GroundTruth = GroundTruth(),
-                   sample: int = DENSE_SAMPLE, seed: int = 0, target_solver: GeodesicSolver | None = None,
+                   sample: int = DENSE_SAMPLE, seed: int = DENSE_SEED, target_solver: GeodesicSolver | None = None,
                    threshold: float = DEFAULT_THRESHOLD) -> DenseEvaluation:
     """Score the dense map ``target`` (source input vertex -> target input vertex).
 
@@ -453,24 +476,45 @@ def evaluate_dense(source_mesh: Mesh, target_mesh: Mesh, target: np.ndarray, tru
     With identity ``truth`` the sample is drawn from the source vertices; with ``.vts`` truth
     from the listed source samples (their correspondents are known exactly). ``sample`` vertices
     are drawn with ``numpy.random.default_rng(seed)`` (all when fewer), so two maps of the same
-    pair are scored on the same vertices.
+    pair are scored on the same vertices. Unmapped sampled vertices get an infinite error.
     """
-    target = np.asarray(target, dtype=np.int64)
+    return evaluate_dense_maps(source_mesh, target_mesh, {"map": target}, truth, sample, seed, target_solver,
+                               threshold)["map"]
+
+
+def evaluate_dense_maps(source_mesh: Mesh, target_mesh: Mesh, targets: dict, truth: GroundTruth = GroundTruth(),
+                        sample: int = DENSE_SAMPLE, seed: int = DENSE_SEED,
+                        target_solver: GeodesicSolver | None = None,
+                        threshold: float = DEFAULT_THRESHOLD) -> dict:
+    """:func:`evaluate_dense` of several maps of one pair (``targets``: name -> map) at once: the
+    same sampled source vertices for all, one fast-marching field per true correspondent read
+    for every map (memory O(V)). Returns name -> :class:`DenseEvaluation`."""
     if truth.source_samples is None:
         candidates = source_mesh.input_index
         true_targets = candidates
     else:
         candidates = np.asarray(truth.source_samples, dtype=np.int64)
         true_targets = np.asarray(truth.target_samples, dtype=np.int64)
+    targets = {name: np.asarray(t, dtype=np.int64) for name, t in targets.items()}
+    shortest = min((len(t) for t in targets.values()), default=0)
     in_source = _to_local(source_mesh, candidates) >= 0
     true_local = _to_local(target_mesh, true_targets)
-    usable = np.flatnonzero(in_source & (true_local >= 0) & (candidates < len(target)))
+    usable = np.flatnonzero(in_source & (true_local >= 0) & (candidates < shortest))
     if len(usable) > sample:
         usable = np.sort(np.random.default_rng(seed).choice(usable, size=sample, replace=False))
     sources = candidates[usable]
-    mapped = _to_local(target_mesh, target[sources])
+    truth_local = true_local[usable]
+    mapped = {name: _to_local(target_mesh, t[sources]) for name, t in targets.items()}
+    errors = {name: np.full(len(sources), np.inf) for name in targets}
     solver = target_solver or GeodesicSolver(target_mesh)
-    errors = np.full(len(sources), np.inf)
-    ok = mapped >= 0
-    errors[ok] = geodesic_errors(target_mesh, solver, mapped[ok], true_local[usable][ok])
-    return DenseEvaluation(sources, errors, threshold)
+    scale = np.sqrt(target_mesh.area())
+    unique, inverse, counts = np.unique(truth_local, return_inverse=True, return_counts=True)
+    groups = np.split(np.argsort(inverse, kind="stable"), np.cumsum(counts)[:-1])
+    for q_true, rows in zip(unique, groups):
+        wanted = [(name, rows[m[rows] >= 0]) for name, m in mapped.items()]
+        if not any(len(r) for _, r in wanted):
+            continue
+        field = solver.distance(int(q_true))
+        for name, r in wanted:
+            errors[name][r] = field[mapped[name][r]] / scale
+    return {name: DenseEvaluation(sources, errors[name], threshold) for name in targets}
