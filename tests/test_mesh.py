@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from darcyan import MeshError, MeshWarning, synthetic
-from darcyan.mesh import Mesh, load_mesh, normalize_mesh, prepare_mesh, save_mesh
+from darcyan.mesh import Mesh, denoise_mesh, load_mesh, normalize_mesh, prepare_mesh, save_mesh
 
 TETRA_V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
 TETRA_F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
@@ -145,3 +145,37 @@ def test_normalization_gives_unit_area_centred(figure_poses):
     mesh, norm = normalize_mesh(figure_poses[0])
     assert np.isclose(mesh.area(), 1.0)
     assert np.isclose(norm.to_input_length(1.0), np.sqrt(figure_poses[0].area()))
+
+
+def _noisy(mesh, fraction, seed=0):
+    """``mesh`` with Gaussian vertex noise of ``fraction`` of its bounding-box diagonal."""
+    diagonal = np.linalg.norm(np.ptp(mesh.vertices, axis=0))
+    noise = np.random.default_rng(seed).normal(scale=fraction * diagonal, size=mesh.vertices.shape)
+    return mesh.with_vertices(mesh.vertices + noise)
+
+
+def test_clean_meshes_are_not_denoised(sphere, figure_poses):
+    for mesh in (sphere, *figure_poses):
+        same, steps, ratio = denoise_mesh(mesh, 1.1)
+        assert steps == 0 and same is mesh and ratio < 1.04
+
+
+def test_noise_is_detected_and_the_true_area_recovered(sphere):
+    """A sphere of radius 2 (area 16 pi) under noise of half an edge: the area grows about 2-fold;
+    after denoising it is back within 3% of the analytic area, vertex count and faces unchanged."""
+    noisy = _noisy(sphere, 0.005)  # sigma 0.035: the sphere's diagonal is 4 sqrt(3), its edges ~0.075
+    assert noisy.area() > 1.5 * 16 * np.pi
+    smoothed, steps, ratio = denoise_mesh(noisy, 1.1)
+    assert steps > 0 and ratio > 1.1
+    assert smoothed.area() == pytest.approx(16 * np.pi, rel=0.03)
+    np.testing.assert_array_equal(smoothed.faces, sphere.faces)
+    radii = np.linalg.norm(smoothed.vertices, axis=1)
+    assert np.abs(radii - 2.0).max() < 0.1
+    assert denoise_mesh(noisy, 0)[1] == 0  # 0: off
+
+
+def test_tosca_meshes_stay_below_the_denoising_threshold(tosca):
+    """Clean scanned-quality meshes are analysed as they are (the default's results do not move)."""
+    for path in sorted((tosca / "tosca-5k").glob("*.off")):
+        _, steps, ratio = denoise_mesh(load_mesh(path), 1.1)
+        assert steps == 0, f"{path.name}: area ratio {ratio:.3f}"

@@ -29,6 +29,7 @@ CONFIG_HELP = {
     "radius": "R, radius of the outer level curve",
     "interpolation": "samples per radial-line gap on each level curve (the paper's interpolation step)",
     "curvature_smoothing": "one-ring smoothing iterations of the curvatures",
+    "denoise_area_ratio": "Taubin-smooth a mesh whose area exceeds this multiple of a smoothed copy's (vertex noise), 0 = never",
     "agd_sources": "fast-marching sources approximating AGD",
     "agd_smoothing": "heat-diffusion length applied to AGD before taking maxima, 0 = the paper's plain AGD",
     "proxy_vertices": "AGD of larger meshes is computed on a copy decimated to this many vertices, 0 = never",
@@ -47,7 +48,7 @@ def _add_config_options(parser: argparse.ArgumentParser) -> None:
                            help=f"{text} (default {value})")
     group.add_argument("--paper", action="store_true",
                        help="the paper's method as published: plain AGD maxima (--agd-smoothing 0 --extremity-radius "
-                            "0.15) and nearest-descriptor matching; options given beside it still apply")
+                            "0.15), no denoising and nearest-descriptor matching; options given beside it still apply")
     parser.add_argument("--repair", action="store_true", help="drop duplicate/degenerate faces and unreferenced vertices instead of refusing them")
     parser.add_argument("--no-cache", action="store_true", help="do not read or write the per-shape cache ($DARCYAN_CACHE)")
 

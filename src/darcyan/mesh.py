@@ -855,3 +855,59 @@ def boundary_vertices(mesh: Mesh) -> np.ndarray:
     mask[once // max(n, 1)] = True
     mask[once % max(n, 1)] = True
     return mask
+
+
+# ----------------------------------------------------------------------------------------------
+# Denoising
+
+# Taubin's lambda|mu pair (pass-band ~0.1): smooths without the shrinkage of plain Laplacian steps.
+TAUBIN_LAMBDA, TAUBIN_MU = 0.5, -0.53
+DENOISE_BLOCK = 10  # Taubin steps between two area measurements
+DENOISE_MAX_STEPS = 200
+DENOISE_SETTLED = 1.02  # a block that shrinks the area by less than this factor ends the smoothing
+
+
+def taubin_smooth(mesh: Mesh, steps: int) -> Mesh:
+    """``steps`` Taubin lambda|mu smoothing steps with uniform one-ring weights; faces, vertex
+    numbering and the map back to the input are kept."""
+    n = mesh.n_vertices
+    edges = mesh.edges()
+    rows, cols = np.concatenate([edges[:, 0], edges[:, 1]]), np.concatenate([edges[:, 1], edges[:, 0]])
+    adjacency = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    degree = np.maximum(np.asarray(adjacency.sum(axis=1)).ravel(), 1)
+    average = sp.diags(1.0 / degree) @ adjacency
+    v = mesh.vertices
+    for _ in range(steps):
+        v = v + TAUBIN_LAMBDA * (average @ v - v)
+        v = v + TAUBIN_MU * (average @ v - v)
+    return mesh.with_vertices(v)
+
+
+def denoise_mesh(mesh: Mesh, area_ratio: float) -> tuple[Mesh, int, float]:
+    """Smooth ``mesh`` when its surface is crumpled at the scale of its edges.
+
+    Vertex noise inflates the surface area (2.5-fold at a noise of half an edge), which breaks the
+    scale normalization and every length of the method. A clean mesh loses at most ~3% of its area
+    to ``DENOISE_BLOCK`` Taubin steps (all TOSCA meshes, 5k and full resolution); a noisy one much
+    more. When the area exceeds ``area_ratio`` times the area after one block, Taubin blocks are
+    applied until a block shrinks the area by less than ``DENOISE_SETTLED`` (at most
+    ``DENOISE_MAX_STEPS`` steps). ``area_ratio`` <= 0 disables the test.
+
+    Returns the mesh to analyse (the input itself when left alone), the number of steps applied and
+    the measured ratio (area / area after one block).
+    """
+    if area_ratio <= 0:
+        return mesh, 0, 1.0
+    area = mesh.area()
+    smoothed = taubin_smooth(mesh, DENOISE_BLOCK)
+    ratio = area / max(smoothed.area(), 1e-300)
+    if not ratio > area_ratio:
+        return mesh, 0, ratio
+    steps, previous = DENOISE_BLOCK, smoothed.area()
+    while steps < DENOISE_MAX_STEPS:
+        candidate = taubin_smooth(smoothed, DENOISE_BLOCK)
+        shrink = previous / max(candidate.area(), 1e-300)
+        smoothed, previous, steps = candidate, candidate.area(), steps + DENOISE_BLOCK
+        if shrink < DENOISE_SETTLED:
+            break
+    return smoothed, steps, ratio

@@ -1,7 +1,7 @@
 """The method end to end: describe a shape, match two shapes.
 
 :func:`describe_shape` runs, for one mesh: preparation (checks, optional repair, largest
-component), scale normalization to area 1, Meyer curvatures, AGD, extremities, a Darcyan grid
+component), denoising of crumpled surfaces, scale normalization to area 1, Meyer curvatures, AGD, extremities, a Darcyan grid
 around each and its curvature descriptor. :func:`match_shapes` matches two descriptions.
 Feature vertices are always reported in the numbering of the input file.
 """
@@ -27,7 +27,7 @@ from .symmetry import OrientedSurface, choose_orientation, curvature_signature
 from .grid import DarcyanGrid, darcyan_grids
 from .matching import Matches, consistent_candidates, match_descriptors
 from .proxy import coarse_proxy
-from .mesh import Mesh, MeshWarning, Normalization, load_mesh, normalize_mesh, prepare_mesh
+from .mesh import Mesh, MeshWarning, Normalization, denoise_mesh, load_mesh, normalize_mesh, prepare_mesh
 
 
 @dataclass
@@ -119,6 +119,11 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     n_input = mesh.n_vertices
     stage("prepare")
     prepared, changes = prepare_mesh(mesh, repair=repair)
+    prepared, steps, roughness = denoise_mesh(prepared, config.denoise_area_ratio)
+    if steps:
+        warnings.warn(f"{mesh.name}: the surface is crumpled at the scale of its edges (its area is "
+                      f"{roughness:.2f} times that of a smoothed copy: vertex noise?); analysed after "
+                      f"{steps} Taubin smoothing steps", MeshWarning, stacklevel=2)
     normalized, normalization = normalize_mesh(prepared)
     edges = normalized.edges()
     mean_edge = float(np.linalg.norm(normalized.vertices[edges[:, 0]] - normalized.vertices[edges[:, 1]], axis=1).mean())
@@ -289,7 +294,7 @@ _CACHED_KEYS = {"feature_vertices", "feature_agd", "descriptors", "feature_geode
 # The parameters a shape description depends on (matching does not change it).
 DESCRIBE_FIELDS = ("levels", "radial_lines", "radius", "interpolation", "curvature_smoothing",
                    "agd_sources", "agd_smoothing", "extremity_radius", "min_agd_quantile", "max_features",
-                   "proxy_vertices")
+                   "proxy_vertices", "denoise_area_ratio")
 
 
 def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
