@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from darcyan import MeshError, MeshWarning, synthetic
-from darcyan.mesh import Mesh, denoise_mesh, load_mesh, normalize_mesh, prepare_mesh, save_mesh
+from darcyan.mesh import Mesh, denoise_mesh, load_mesh, normalize_mesh, prepare_mesh, save_mesh, surface_roughness
 
 TETRA_V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
 TETRA_F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
@@ -158,6 +158,12 @@ def test_clean_meshes_are_not_denoised(sphere, figure_poses):
     for mesh in (sphere, *figure_poses):
         same, steps, ratio = denoise_mesh(mesh, 1.1)
         assert steps == 0 and same is mesh and ratio < 1.04
+    # Coarse clean meshes lose more than 10% of their area to smoothing, but are not rough.
+    for subdivisions in (2, 3):
+        coarse = synthetic.figure(1, subdivisions=subdivisions)
+        same, steps, ratio = denoise_mesh(coarse, 1.1)
+        assert ratio > 1.1 and steps == 0 and same is coarse
+        assert surface_roughness(coarse) < 1.0 < surface_roughness(_noisy(coarse, 0.005))
 
 
 def test_noise_is_detected_and_the_true_area_recovered(sphere):
