@@ -39,3 +39,9 @@ def figure_poses():
 def random_rotation(seed: int = 0) -> np.ndarray:
     q, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
     return q * np.sign(np.linalg.det(q))  # a proper rotation
+
+
+def noisy_copy(mesh, fraction: float, seed: int = 0):
+    """``mesh`` with Gaussian vertex noise of ``fraction`` of its bounding-box diagonal."""
+    sigma = fraction * np.linalg.norm(np.ptp(mesh.vertices, axis=0))
+    return mesh.with_vertices(mesh.vertices + np.random.default_rng(seed).normal(scale=sigma, size=mesh.vertices.shape))

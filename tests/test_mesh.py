@@ -5,6 +5,7 @@ import warnings
 import numpy as np
 import pytest
 
+from conftest import noisy_copy
 from darcyan import MeshError, MeshWarning, synthetic
 from darcyan.mesh import (DENOISE_BLOCK, Mesh, denoise_mesh, load_mesh, normalize_mesh, prepare_mesh, save_mesh,
                           surface_roughness, taubin_smooth)
@@ -148,13 +149,6 @@ def test_normalization_gives_unit_area_centred(figure_poses):
     assert np.isclose(norm.to_input_length(1.0), np.sqrt(figure_poses[0].area()))
 
 
-def _noisy(mesh, fraction, seed=0):
-    """``mesh`` with Gaussian vertex noise of ``fraction`` of its bounding-box diagonal."""
-    diagonal = np.linalg.norm(np.ptp(mesh.vertices, axis=0))
-    noise = np.random.default_rng(seed).normal(scale=fraction * diagonal, size=mesh.vertices.shape)
-    return mesh.with_vertices(mesh.vertices + noise)
-
-
 def test_clean_meshes_are_not_denoised(sphere, figure_poses):
     for mesh in (sphere, *figure_poses):
         same, steps, _ = denoise_mesh(mesh, 1.1)
@@ -166,13 +160,13 @@ def test_clean_meshes_are_not_denoised(sphere, figure_poses):
         same, steps, _ = denoise_mesh(coarse, 1.1)
         assert steps == 0 and same is coarse
         assert coarse.area() / taubin_smooth(coarse, DENOISE_BLOCK).area() > 1.1
-        assert surface_roughness(coarse) < 1.0 < surface_roughness(_noisy(coarse, 0.005))
+        assert surface_roughness(coarse) < 1.0 < surface_roughness(noisy_copy(coarse, 0.005))
 
 
 def test_noise_is_detected_and_the_true_area_recovered(sphere):
     """A sphere of radius 2 (area 16 pi) under noise of half an edge: the area grows about 2-fold;
     after denoising it is back within 3% of the analytic area, vertex count and faces unchanged."""
-    noisy = _noisy(sphere, 0.005)  # sigma 0.035: the sphere's diagonal is 4 sqrt(3), its edges ~0.075
+    noisy = noisy_copy(sphere, 0.005)  # sigma 0.035: the sphere's diagonal is 4 sqrt(3), its edges ~0.075
     assert noisy.area() > 1.5 * 16 * np.pi
     smoothed, steps, ratio = denoise_mesh(noisy, 1.1)
     assert steps > 0 and ratio > 1.1

@@ -529,15 +529,13 @@ def test_noisy_figure_is_denoised_and_still_matched():
     without it (measured: 5/5 against 3/4), so the test fails if denoising stops working."""
     import warnings
 
+    from conftest import noisy_copy
     from darcyan import MeshWarning
     from darcyan.evaluation import geodesic_errors
     from darcyan.pipeline import analyze_mesh, match_shapes
 
     clean = [synthetic.figure(0), synthetic.figure(1)]
-    noisy = []
-    for seed, mesh in enumerate(clean):
-        sigma = 0.01 * np.linalg.norm(np.ptp(mesh.vertices, axis=0))
-        noisy.append(mesh.with_vertices(mesh.vertices + np.random.default_rng(seed).normal(scale=sigma, size=mesh.vertices.shape)))
+    noisy = [noisy_copy(mesh, 0.01, seed) for seed, mesh in enumerate(clean)]
     reference = analyze_mesh(clean[1])
 
     def correct(config):

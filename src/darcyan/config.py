@@ -30,10 +30,10 @@ class DarcyanConfig:
             ``radial_lines * interpolation`` points (geodesics traced between the m radial lines)
             so the per-level mean sees more of the curve. 1 disables it.
         denoise_area_ratio: a mesh whose area exceeds this multiple of its area after a few
-            Taubin smoothing steps is crumpled by noise at the scale of its edges; it is analysed
-            after Taubin smoothing (with a warning), vertex numbering kept. Clean meshes stay
-            below 1.04 (all of TOSCA), vertex noise of half an edge gives about 2.4.
-            0 disables the test.
+            Taubin smoothing steps, and whose roughness is that of vertex noise, is crumpled at
+            the scale of its edges; it is analysed after Taubin smoothing (with a warning), vertex
+            numbering kept (see :func:`darcyan.mesh.denoise_mesh`). Clean TOSCA meshes stay below
+            1.04, vertex noise of half an edge gives 1.4 to 2.5. 0 disables the test.
         curvature_smoothing: iterations of area-weighted one-ring averaging applied to the Meyer
             principal curvatures before they are sampled (0 = raw Meyer operators).
         agd_sources: number of farthest-point-sampled sources whose fast-marching distances are

@@ -18,7 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .geodesics import vertex_normals
-from .mesh import Mesh, boundary_vertices
+from .mesh import Mesh, boundary_vertices, vertex_adjacency
 
 
 @dataclass(frozen=True)
@@ -125,10 +125,7 @@ def principal_curvatures(mesh: Mesh, smoothing: int = 0) -> Curvatures:
 
 def smooth_vertex_fields(mesh: Mesh, fields, iterations: int, area: np.ndarray | None = None):
     """Area-weighted one-ring averaging (each vertex with its neighbours), ``iterations`` times."""
-    n = mesh.n_vertices
-    e = mesh.edges()
-    adjacency = sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                              shape=(n, n)).tocsr() + sp.identity(n, format="csr")
+    adjacency = vertex_adjacency(mesh) + sp.identity(mesh.n_vertices, format="csr")
     if area is None:
         area = mixed_voronoi_area(mesh)
     weighted = adjacency @ sp.diags(area)

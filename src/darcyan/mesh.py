@@ -109,6 +109,13 @@ def _edge_counts(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.nda
     return np.unique(keys, return_counts=True)
 
 
+def vertex_adjacency(mesh: Mesh) -> sp.csr_matrix:
+    """``(n, n)`` symmetric 0/1 matrix: 1 where two vertices share an edge."""
+    n, e = mesh.n_vertices, mesh.edges()
+    return sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
+                         shape=(n, n)).tocsr()
+
+
 def face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """``(m,)`` areas of the triangles ``faces`` of ``vertices``."""
     a, b, c = (vertices[faces[:, i]] for i in range(3))
@@ -873,32 +880,30 @@ NOISE_ROUGHNESS = 1.15
 
 def _umbrella(mesh: Mesh) -> sp.csr_matrix:
     """The uniform-weight one-ring averaging operator (rows sum to 1)."""
-    n = mesh.n_vertices
-    edges = mesh.edges()
-    rows, cols = np.concatenate([edges[:, 0], edges[:, 1]]), np.concatenate([edges[:, 1], edges[:, 0]])
-    adjacency = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    adjacency = vertex_adjacency(mesh)
     degree = np.maximum(np.asarray(adjacency.sum(axis=1)).ravel(), 1)
     return sp.diags(1.0 / degree) @ adjacency
 
 
-def surface_roughness(mesh: Mesh) -> float:
+def surface_roughness(mesh: Mesh, average: sp.csr_matrix | None = None) -> float:
     """median |L L x| / median |L x| for the umbrella Laplacian L = average - identity.
 
     Dimensionless. On a smooth surface L x is the mean-curvature normal, itself smooth, so a second
     application shrinks it; on uncorrelated vertex noise L acts as on white noise and the ratio
-    is ~1.25 whatever the noise's amplitude.
+    is ~1.25 whatever the noise's amplitude. ``average``: the mesh's umbrella operator, if built.
     """
-    average = _umbrella(mesh)
+    average = _umbrella(mesh) if average is None else average
     lx = average @ mesh.vertices - mesh.vertices
     llx = average @ lx - lx
     first = float(np.median(np.linalg.norm(lx, axis=1)))
     return float(np.median(np.linalg.norm(llx, axis=1))) / first if first > 0 else 0.0
 
 
-def taubin_smooth(mesh: Mesh, steps: int) -> Mesh:
+def taubin_smooth(mesh: Mesh, steps: int, average: sp.csr_matrix | None = None) -> Mesh:
     """``steps`` Taubin lambda|mu smoothing steps with uniform one-ring weights; faces, vertex
-    numbering and the map back to the input are kept."""
-    average = _umbrella(mesh)
+    numbering and the map back to the input are kept. ``average``: the umbrella operator, if built
+    (it depends on the connectivity only)."""
+    average = _umbrella(mesh) if average is None else average
     v = mesh.vertices
     for _ in range(steps):
         v = v + TAUBIN_LAMBDA * (average @ v - v)
@@ -922,18 +927,22 @@ def denoise_mesh(mesh: Mesh, area_ratio: float) -> tuple[Mesh, int, float]:
     the measured ratio (area / area after one block; NaN when the roughness test, which is checked
     first because it is 10 times cheaper, already rules noise out).
     """
-    if area_ratio <= 0 or surface_roughness(mesh) <= NOISE_ROUGHNESS:
+    if area_ratio <= 0:
         return mesh, 0, float("nan")
-    area = mesh.area()
-    smoothed = taubin_smooth(mesh, DENOISE_BLOCK)
-    ratio = area / max(smoothed.area(), 1e-300)
+    average = _umbrella(mesh)  # connectivity only: one operator for every step
+    if surface_roughness(mesh, average) <= NOISE_ROUGHNESS:
+        return mesh, 0, float("nan")
+    smoothed = taubin_smooth(mesh, DENOISE_BLOCK, average)
+    previous = max(smoothed.area(), 1e-300)
+    ratio = mesh.area() / previous
     if not ratio > area_ratio:
         return mesh, 0, ratio
-    steps, previous = DENOISE_BLOCK, smoothed.area()
+    steps = DENOISE_BLOCK
     while steps < DENOISE_MAX_STEPS:
-        candidate = taubin_smooth(smoothed, DENOISE_BLOCK)
-        shrink = previous / max(candidate.area(), 1e-300)
-        smoothed, previous, steps = candidate, candidate.area(), steps + DENOISE_BLOCK
-        if shrink < DENOISE_SETTLED:
+        smoothed = taubin_smooth(smoothed, DENOISE_BLOCK, average)
+        steps += DENOISE_BLOCK
+        area = max(smoothed.area(), 1e-300)
+        settled, previous = previous / area < DENOISE_SETTLED, area
+        if settled:
             break
     return smoothed, steps, ratio

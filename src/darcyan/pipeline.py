@@ -1,9 +1,9 @@
 """The method end to end: describe a shape, match two shapes.
 
 :func:`describe_shape` runs, for one mesh: preparation (checks, optional repair, largest
-component), denoising of crumpled surfaces, scale normalization to area 1, Meyer curvatures, AGD, extremities, a Darcyan grid
-around each and its curvature descriptor. :func:`match_shapes` matches two descriptions.
-Feature vertices are always reported in the numbering of the input file.
+component), denoising of crumpled surfaces, scale normalization to area 1, Meyer curvatures,
+AGD, extremities, a Darcyan grid around each and its curvature descriptor. :func:`match_shapes`
+matches two descriptions. Feature vertices are always reported in the numbering of the input file.
 """
 
 from __future__ import annotations
@@ -119,10 +119,10 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     n_input = mesh.n_vertices
     stage("prepare")
     prepared, changes = prepare_mesh(mesh, repair=repair)
-    prepared, steps, roughness = denoise_mesh(prepared, config.denoise_area_ratio)
+    prepared, steps, area_ratio = denoise_mesh(prepared, config.denoise_area_ratio)
     if steps:
         warnings.warn(f"{mesh.name}: the surface is crumpled at the scale of its edges (its area is "
-                      f"{roughness:.2f} times that of a smoothed copy: vertex noise?); analysed after "
+                      f"{area_ratio:.2f} times that of a smoothed copy: vertex noise?); analysed after "
                       f"{steps} Taubin smoothing steps", MeshWarning, stacklevel=2)
     normalized, normalization = normalize_mesh(prepared)
     edges = normalized.edges()
