@@ -57,3 +57,54 @@ def test_locate_recovers_surface_points(sphere):
     f, b = solver.locate(points)
     back = np.einsum("kj,kjd->kd", b, mesh.vertices[mesh.faces[f]])
     np.testing.assert_allclose(back, points, atol=1e-9)
+
+
+# --- Exact geodesics on a ball cut around a vertex ---------------------------------------------
+
+
+def _figure_with_proxy():
+    from darcyan.mesh import normalize_mesh
+    from darcyan.proxy import coarse_proxy
+
+    mesh, _ = normalize_mesh(prepare_mesh(synthetic.figure(1))[0])  # area 1
+    return mesh, GeodesicSolver(mesh), coarse_proxy(mesh, 2500)
+
+
+def test_ball_fields_equal_whole_mesh_fast_marching_within_the_radius():
+    from darcyan.geodesics import LocalGeodesicSolver
+
+    mesh, solver, proxy = _figure_with_proxy()
+    radius = 0.25
+    local = LocalGeodesicSolver(solver, radius, proxy.distance)
+    for v in synthetic.figure_tips()[:3] + [0]:
+        exact = solver.distance(v)
+        field = local.distance(v)
+        ball = local.ball(v)
+        assert ball.mesh.n_vertices < 0.6 * mesh.n_vertices  # a piece, not the whole mesh
+        near = exact <= radius
+        np.testing.assert_array_equal(field[near], exact[near])  # bit for bit
+        assert (field[~near] > radius).all()
+        # beyond the ball: the coarse estimate, within a few percent of the distance
+        np.testing.assert_allclose(field[~near], exact[~near], rtol=0.12, atol=0.02)
+
+
+def test_a_ball_cut_too_tight_by_a_bad_estimate_grows_until_exact():
+    from darcyan.geodesics import LocalGeodesicSolver
+
+    mesh, solver, proxy = _figure_with_proxy()
+    radius = 0.2
+    local = LocalGeodesicSolver(solver, radius, lambda v: 3.0 * proxy.distance(v))  # overestimates x3
+    v = synthetic.figure_tips()[0]
+    exact = solver.distance(v)
+    near = exact <= radius
+    np.testing.assert_array_equal(local.distance(v)[near], exact[near])
+
+
+def test_without_an_estimate_fields_and_balls_are_the_whole_mesh(sphere):
+    from darcyan.geodesics import LocalGeodesicSolver
+
+    mesh, _ = prepare_mesh(sphere)
+    solver = GeodesicSolver(mesh)
+    local = LocalGeodesicSolver(solver, 0.5)
+    np.testing.assert_array_equal(local.distance(7), solver.distance(7))
+    assert local.ball(7).mesh is mesh and local.ball(7).solver is solver

@@ -74,3 +74,26 @@ def test_descriptor_invariant_to_rigid_motion_and_renumbering(figure_descriptor)
     order = {v: i for i, v in enumerate(ref.feature_vertices)}
     for v, d in zip(perm[other.feature_vertices], other.descriptors):
         np.testing.assert_allclose(d, ref.descriptors[order[v]], rtol=0.03)
+
+
+def test_grid_built_on_a_ball_equals_the_grid_on_the_whole_mesh():
+    from darcyan.geodesics import LocalGeodesicSolver
+    from darcyan.grid import darcyan_grids, grid_reach
+    from darcyan.mesh import normalize_mesh
+    from darcyan.proxy import coarse_proxy
+
+    mesh, _ = normalize_mesh(prepare_mesh(synthetic.figure(1))[0])
+    solver = GeodesicSolver(mesh)
+    config = DarcyanConfig()
+    local = LocalGeodesicSolver(solver, grid_reach(config), coarse_proxy(mesh, 2500).distance)
+    tips = synthetic.figure_tips()
+    toward = solver.distance(0)
+    whole = darcyan_grids(mesh, solver, tips, config, toward=toward)
+    cut = darcyan_grids(mesh, local, tips, config, toward=toward)
+    assert max(local.ball(t).mesh.n_vertices for t in tips) < mesh.n_vertices / 2
+    for a, b in zip(whole, cut):
+        assert a.centre == b.centre
+        np.testing.assert_array_equal(a.valid, b.valid)
+        np.testing.assert_array_equal(a.faces, b.faces)  # reported in the whole mesh's numbering
+        np.testing.assert_allclose(a.points[a.valid], b.points[b.valid], atol=1e-9)
+        np.testing.assert_allclose(a.barycentric[a.valid], b.barycentric[b.valid], atol=1e-9)

@@ -30,3 +30,16 @@ def test_features_with_proxy_are_the_figure_tips():
     assert len(shape) == len(tips)
     dist = np.array([shape.solver.distance(t)[shape.features.vertices] for t in tips])
     assert (dist.min(axis=1) < 0.03).all()
+
+
+def test_proxy_distance_field_is_close_to_great_circle_arcs(sphere):
+    mesh, _ = prepare_mesh(sphere)
+    proxy = coarse_proxy(mesh, 2000)
+    d = proxy.distance(5)
+    arc = 2.0 * np.arccos(np.clip(mesh.vertices @ mesh.vertices[5] / 4.0, -1, 1))  # r = 2
+    assert d.shape == (mesh.n_vertices,)
+    # coarse fast marching errs by up to about an edge of the copy (here 0.19) plus a few percent
+    e = proxy.mesh.edges()
+    edge = np.linalg.norm(proxy.mesh.vertices[e[:, 0]] - proxy.mesh.vertices[e[:, 1]], axis=1).mean()
+    np.testing.assert_allclose(d, arc, rtol=0.03, atol=1.5 * edge)
+    assert np.median(np.abs(d - arc)) < edge

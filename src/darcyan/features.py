@@ -14,7 +14,7 @@ import numpy as np
 
 from .config import DarcyanConfig
 from .curvature import mixed_voronoi_area
-from .geodesics import GeodesicSolver
+from .geodesics import GeodesicSolver, LocalGeodesicSolver
 from .mesh import Mesh
 
 
@@ -111,14 +111,15 @@ def one_ring_maxima(mesh: Mesh, values: np.ndarray) -> np.ndarray:
     return np.flatnonzero(values >= neighbour_max)
 
 
-def extremities(mesh: Mesh, solver: GeodesicSolver, agd: AGD, config: DarcyanConfig,
+def extremities(mesh: Mesh, solver: GeodesicSolver | LocalGeodesicSolver, agd: AGD, config: DarcyanConfig,
                 distance_cache: dict | None = None) -> FeaturePoints:
     """Local maxima of AGD over a geodesic ball of radius ``config.extremity_radius``.
 
     Candidates are one-ring maxima above the ``min_agd_quantile`` of AGD, visited by decreasing
     AGD; one is kept when no kept point lies within the radius and no vertex within the radius
     has a larger AGD (checked on its own fast-marching field, which ``distance_cache`` keeps for
-    the grid built around it next).
+    the grid built around it next). A :class:`LocalGeodesicSolver` needs a radius of at least
+    ``config.extremity_radius``.
     """
     values = agd.values
     floor = np.quantile(values, config.min_agd_quantile)

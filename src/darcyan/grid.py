@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .config import DarcyanConfig
-from .geodesics import GeodesicSolver, interpolate, vertex_gradient, vertex_normals
+from .geodesics import GeodesicBall, GeodesicSolver, LocalGeodesicSolver, interpolate, vertex_gradient, vertex_normals
 from .mesh import Mesh
 
 # Radial geodesics are traced this much beyond R: fast marching overestimates distance slightly,
@@ -84,13 +84,14 @@ def reference_direction(mesh: Mesh, vertex: int, toward_field: np.ndarray, norma
     return g / np.linalg.norm(g)
 
 
-def darcyan_grids(mesh: Mesh, solver: GeodesicSolver, vertices, config: DarcyanConfig,
+def darcyan_grids(mesh: Mesh, solver: GeodesicSolver | LocalGeodesicSolver, vertices, config: DarcyanConfig,
                   distances: dict | None = None, toward: np.ndarray | None = None) -> list[DarcyanGrid]:
     """Darcyan coordinate systems around several vertices.
 
     Args:
         mesh: the (normalized) mesh; radii in ``config`` are in its length unit.
-        solver: the mesh's geodesic solver.
+        solver: the mesh's geodesic solver; a :class:`LocalGeodesicSolver` (radius at least
+            :func:`grid_reach`) builds each grid on the ball around its centre alone.
         vertices: centre vertices.
         config: levels n, radial_lines m, radius R, interpolation q.
         distances: optional cache ``{vertex: (n_vertices,) fast-marching distance}``, filled in.
@@ -102,53 +103,54 @@ def darcyan_grids(mesh: Mesh, solver: GeodesicSolver, vertices, config: DarcyanC
         One :class:`DarcyanGrid` per vertex.
     """
     distances = {} if distances is None else distances
+    local = solver if isinstance(solver, LocalGeodesicSolver) else LocalGeodesicSolver(solver, np.inf)
     normals = vertex_normals(mesh)
     radii = np.asarray(config.level_radii)
     q = config.interpolation
     angles = 2 * np.pi * np.arange(config.radial_lines * q) / (config.radial_lines * q)
-    paths_all, owners = [], []
-    references = []
-    for i, v in enumerate(vertices):
+    grids = []
+    for v in vertices:
         v = int(v)
         if v not in distances:
-            distances[v] = solver.distance(v)
-        field = toward if toward is not None else solver.distance(int(np.argmax(distances[v])))
-        n = normals[v]
-        ref = reference_direction(mesh, v, field, n)
-        side = np.cross(n, ref)
-        references.append(ref)
-        for a in angles:
-            path = solver.trace(v, np.cos(a) * ref + np.sin(a) * side, TRACE_MARGIN * radii[-1])
-            paths_all.append(path)
-            owners.append(i)
+            distances[v] = local.distance(v)
+        field = toward if toward is not None else local.solver.distance(int(np.argmax(distances[v])))
+        ball = local.ball(v)
+        grids.append(_grid(ball, distances[v][ball.vertices], field[ball.vertices], normals[v], radii, angles, q))
+    return grids
+
+
+def _grid(ball: GeodesicBall, distance: np.ndarray, toward: np.ndarray, normal: np.ndarray,
+          radii: np.ndarray, angles: np.ndarray, q: int) -> DarcyanGrid:
+    """One grid, built on ``ball`` (its fields ``distance`` and ``toward`` given on the ball's
+    vertices); faces are reported in the whole mesh's numbering."""
+    c, solver = ball.centre, ball.solver
+    ref = reference_direction(ball.mesh, c, toward, normal)
+    side = np.cross(normal, ref)
+    paths = [solver.trace(c, np.cos(a) * ref + np.sin(a) * side, TRACE_MARGIN * radii[-1]) for a in angles]
     # Locate every traced point at once, read U there, and cut each line at the level radii.
-    lengths = [len(p) for p in paths_all]
-    stacked = np.concatenate(paths_all) if paths_all else np.zeros((0, 3))
-    faces, bary = solver.locate(stacked)
-    offsets = np.concatenate([[0], np.cumsum(lengths)])
-    crossing_points = []  # per path: (n, 3) positions, NaN where missing
-    for p, (path, owner) in enumerate(zip(paths_all, owners)):
+    offsets = np.concatenate([[0], np.cumsum([len(p) for p in paths])])
+    faces, bary = solver.locate(np.concatenate(paths))
+    crossing = np.empty((len(angles), len(radii), 3))
+    for p, path in enumerate(paths):
         sl = slice(offsets[p], offsets[p + 1])
-        u = interpolate(mesh, distances[int(vertices[owner])], faces[sl], bary[sl])
+        u = interpolate(ball.mesh, distance, faces[sl], bary[sl])
         u[0] = 0.0
-        crossing_points.append(_level_crossings(path, u, radii))
-    crossing = np.array(crossing_points).reshape(len(vertices), len(angles), len(radii), 3) if paths_all else \
-        np.zeros((0, len(angles), len(radii), 3))
+        crossing[p] = _level_crossings(path, u, radii)
     valid = np.isfinite(crossing[..., 0])
     f_all = np.full(valid.shape, -1, dtype=np.int64)
     b_all = np.full(valid.shape + (3,), np.nan)
     if valid.any():
         f_ok, b_ok = solver.locate(crossing[valid])
-        f_all[valid], b_all[valid] = f_ok, b_ok
-    grids = []
-    m_total = len(angles)
-    for i, v in enumerate(vertices):
-        grids.append(DarcyanGrid(
-            centre=int(v), radii=radii, angles=angles,
-            points=crossing[i].transpose(1, 0, 2), faces=f_all[i].T, barycentric=b_all[i].transpose(1, 0, 2),
-            valid=valid[i].T, reference=references[i], interpolation=q,
-            radial_paths=tuple(paths_all[i * m_total:(i + 1) * m_total])))
-    return grids
+        f_all[valid], b_all[valid] = ball.faces[f_ok], b_ok
+    return DarcyanGrid(
+        centre=int(ball.vertices[c]), radii=radii, angles=angles,
+        points=crossing.transpose(1, 0, 2), faces=f_all.T, barycentric=b_all.transpose(1, 0, 2),
+        valid=valid.T, reference=ref, interpolation=q, radial_paths=tuple(paths))
+
+
+def grid_reach(config: DarcyanConfig) -> float:
+    """Geodesic radius (mesh units) around its centre that a grid's construction looks at."""
+    return TRACE_MARGIN * config.level_radii[-1]
 
 
 def darcyan_grid(mesh: Mesh, solver: GeodesicSolver, vertex: int, config: DarcyanConfig,

@@ -22,9 +22,9 @@ from .curvature import Curvatures, principal_curvatures
 from .descriptors import curvature_descriptors
 from .errors import MeshError
 from .features import AGD, FeaturePoints, average_geodesic_distance, extremities
-from .geodesics import GeodesicSolver, vertex_normals
+from .geodesics import GeodesicSolver, LocalGeodesicSolver, vertex_normals
 from .symmetry import OrientedSurface, choose_orientation, curvature_signature
-from .grid import DarcyanGrid, darcyan_grids
+from .grid import DarcyanGrid, darcyan_grids, grid_reach
 from .matching import Matches, consistent_candidates, match_descriptors
 from .proxy import coarse_proxy
 from .mesh import Mesh, MeshWarning, Normalization, denoise_mesh, load_mesh, normalize_mesh, prepare_mesh
@@ -145,14 +145,18 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
         agd = AGD(proxy.to_full(coarse.values), coarse.sources)
     done("agd")
     stage("features")
+    # Exact geodesics only where extremities and grids look; beyond, the proxy's estimate.
+    local = LocalGeodesicSolver(solver, max(config.extremity_radius, grid_reach(config)),
+                                None if proxy is None else proxy.distance)
     distances: dict = {}
-    features = extremities(normalized, solver, agd, config, distances)
+    features = extremities(normalized, local, agd, config, distances)
     if len(features) == 0:
         raise MeshError(mesh.name, "no feature points found (no extremity stands out on this shape)")
     done("features")
     stage("descriptors")
-    centre = solver.distance(int(np.argmin(agd.values)))
-    grids = darcyan_grids(normalized, solver, features.vertices, config, distances, toward=centre)
+    centre_vertex = int(np.argmin(agd.values))
+    centre = solver.distance(centre_vertex) if proxy is None else proxy.distance(centre_vertex)
+    grids = darcyan_grids(normalized, local, features.vertices, config, distances, toward=centre)
     descriptors = curvature_descriptors(normalized, grids, curvatures)
     if not np.isfinite(descriptors).any(axis=1).any():
         raise MeshError(mesh.name, f"mesh too small to carry a Darcyan grid of radius {config.radius} "
@@ -248,7 +252,7 @@ def _cache_key(cache: ShapeCache | None, path: Path, config: DarcyanConfig, repa
     if cache is None:
         return None
     return cache.key(file_digest(path), config.fingerprint(*DESCRIBE_FIELDS), f"repair={repair}",
-                     f"surface={SURFACE_FORMAT}")
+                     f"description={DESCRIPTION_FORMAT}")
 
 
 def _cached(cache: ShapeCache | None, key: str | None, path: Path) -> ShapeDescription | None:
@@ -282,9 +286,10 @@ def _reemit(caught: list) -> list:
     return said
 
 
-# Bumped when what a description stores about the surface changes (the signature's scaling), so
-# old descriptions are recomputed while other cached work (spectra, mirror maps) is kept.
-SURFACE_FORMAT = 2
+# Bumped when what a description holds changes (the signature's scaling; 3: feature distances
+# beyond the grids from the coarse proxy), so old descriptions are recomputed while other cached
+# work (spectra, mirror maps) is kept.
+DESCRIPTION_FORMAT = 3
 
 # What a cache entry must hold to be used (older entries without them are recomputed).
 _CACHED_KEYS = {"feature_vertices", "feature_agd", "descriptors", "feature_geodesics", "n_input_vertices",

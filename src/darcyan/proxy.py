@@ -47,6 +47,13 @@ class CoarseProxy:
         self.solver = GeodesicSolver(self.mesh)
         self._faces, self._bary = self.solver.locate(full.vertices)
 
+    def distance(self, vertex: int) -> np.ndarray:
+        """``(n_full,)`` fast-marching distance on the copy from the point where the full mesh's
+        ``vertex`` lies on it, read at every full vertex: within a few percent of the distance on
+        the full mesh (decimation shortens and coarse fast marching lengthens paths a little)."""
+        source = [(int(self._faces[vertex]), [float(b) for b in self._bary[vertex]])]
+        return self.to_full(self.solver.distance_from_points(source))
+
     def to_full(self, values: np.ndarray) -> np.ndarray:
         """Per-vertex ``values`` of the copy ``(n_proxy, ...)`` interpolated at the full mesh's vertices."""
         return interpolate(self.mesh, values, self._faces, self._bary)
