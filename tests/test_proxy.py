@@ -23,13 +23,16 @@ def test_small_meshes_get_no_proxy(sphere):
     assert coarse_proxy(mesh, 6000) is None and coarse_proxy(mesh, 0) is None
 
 
-def test_features_with_proxy_are_the_figure_tips():
-    config = DarcyanConfig(proxy_vertices=2500)  # the 10k-vertex figure is decimated to 2.5k
-    shape = analyze_mesh(synthetic.figure(1), config)
+def test_features_with_proxy_are_the_figure_tips_and_those_without():
+    shape = analyze_mesh(synthetic.figure(1), DarcyanConfig(proxy_vertices=2500))  # 10k -> 2.5k
+    exact = analyze_mesh(synthetic.figure(1), DarcyanConfig(proxy_vertices=0))
     tips = synthetic.figure_tips()
-    assert len(shape) == len(tips)
+    assert len(shape) == len(tips) == len(exact)
     dist = np.array([shape.solver.distance(t)[shape.features.vertices] for t in tips])
-    assert (dist.min(axis=1) < 0.03).all()
+    assert (dist.min(axis=1) < 0.05).all()  # the evaluation's threshold (sqrt(area) units)
+    # The proxy is a stand-in for the AGD's distances only: the maxima are those of the full mesh.
+    to_exact = np.array([shape.solver.distance(v)[exact.features.vertices] for v in shape.features.vertices])
+    assert (to_exact.min(axis=1) < 0.03).all()
 
 
 def test_proxy_distance_field_is_close_to_great_circle_arcs(sphere):

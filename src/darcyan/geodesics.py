@@ -30,15 +30,22 @@ class GeodesicSolver:
     """
 
     def __init__(self, mesh: Mesh):
-        import potpourri3d as pp3d
-
         self.mesh = mesh
-        try:
-            self._fmm = pp3d.MeshFastMarchingDistanceSolver(mesh.vertices, mesh.faces)
-        except (RuntimeError, ValueError) as exc:
-            raise MeshError(mesh.name, f"geodesic solver refused the mesh ({str(exc).splitlines()[0][:160]})") from None
+        self._fmm_solver = None  # built at the first distance asked (a large mesh may need none)
         self._tracer = None
         self._tree = None
+
+    @property
+    def _fmm(self):
+        if self._fmm_solver is None:
+            import potpourri3d as pp3d
+
+            try:
+                self._fmm_solver = pp3d.MeshFastMarchingDistanceSolver(self.mesh.vertices, self.mesh.faces)
+            except (RuntimeError, ValueError) as exc:
+                raise MeshError(self.mesh.name, f"geodesic solver refused the mesh "
+                                                f"({str(exc).splitlines()[0][:160]})") from None
+        return self._fmm_solver
 
     def distance(self, vertex: int) -> np.ndarray:
         """``(n,)`` fast-marching geodesic distance from ``vertex`` to every vertex (mesh units)."""
@@ -253,7 +260,7 @@ def _manifold_piece(mesh: Mesh, inside: np.ndarray) -> tuple[Mesh, np.ndarray, n
 
     while not inside.all():
         faces = mesh.faces[inside]
-        used = np.unique(faces)
+        used = np.flatnonzero(np.bincount(faces.ravel(), minlength=mesh.n_vertices))
         index = np.full(mesh.n_vertices, -1, dtype=np.int64)
         index[used] = np.arange(len(used))
         piece = Mesh(mesh.vertices[used], index[faces], name=mesh.name)
