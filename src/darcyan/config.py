@@ -40,9 +40,11 @@ class DarcyanConfig:
             averaged to approximate the Average Geodesic Distance (exact AGD would need V solves).
         agd_smoothing: length scale of a heat diffusion of the AGD field before its maxima are
             taken (0: the paper's plain AGD). Makes feature points repeat across poses.
-        proxy_vertices: the smooth global fields (AGD, the mirror test's signature) of meshes with
-            more than twice this many vertices are computed on a copy decimated to this many
-            vertices and interpolated back (0: always on the full mesh).
+        proxy_vertices: the smooth global fields of meshes with more than twice this many
+            vertices (AGD's distances before their diffusion, the mirror test's signature, the
+            distance estimate that cuts a geodesic ball around each feature point) are computed
+            on a copy decimated to this many vertices and interpolated back (0: always on the
+            full mesh).
         extremity_radius: a feature point is a vertex whose AGD is the largest within this
             geodesic radius (greedy non-maximum suppression over one-ring maxima).
         min_agd_quantile: one-ring maxima whose AGD is below this quantile of the AGD over the
