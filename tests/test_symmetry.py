@@ -61,3 +61,24 @@ def test_humans_keep_left_and_right(tosca, tmp_path):
         correct += int((error < 0.1 * np.sqrt(mesh_2.area())).sum())
         total += len(matches)
     assert total >= 20 and correct / total >= 0.9, (correct, total)
+
+
+def test_test_points_are_drawn_uniformly_over_the_area_not_the_vertices():
+    from darcyan.curvature import mixed_voronoi_area
+    from darcyan.symmetry import OrientedSurface, surface_samples
+
+    # A unit square whose vertex columns crowd toward x = 0 (x = t^2): 71% of the vertices lie
+    # left of x = 0.5, half of the area does.
+    t = np.linspace(0.0, 1.0, 60)
+    x, y = np.meshgrid(t**2, t, indexing="ij")
+    vertices = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1)
+    idx = np.arange(x.size).reshape(x.shape)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    square = Mesh(vertices, np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]))
+    normals = np.tile([0.0, 0.0, 1.0], (x.size, 1))
+    by_area = OrientedSurface(vertices, normals, np.zeros((0, x.size)), areas=mixed_voronoi_area(square))
+    by_vertex = OrientedSurface(vertices, normals, np.zeros((0, x.size)))
+    rng = np.random.default_rng(0)
+    left = lambda s: float((vertices[surface_samples(s, 800, rng), 0] < 0.5).mean())  # noqa: E731
+    assert abs(left(by_area) - 0.5) < 0.05
+    assert abs(left(by_vertex) - np.sqrt(0.5)) < 0.05

@@ -173,7 +173,7 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     surface = OrientedSurface(
         normalized.vertices.astype(np.float32), vertex_normals(normalized).astype(np.float32),
         np.array([distances[int(v)] for v in features.vertices], dtype=np.float32),
-        _signature(normalized, curvatures, proxy, config).astype(np.float32))
+        _signature(normalized, curvatures, proxy, config).astype(np.float32), curvatures.area.astype(np.float32))
     done("layout")
     return ShapeDescription(
         name=mesh.name, n_input_vertices=n_input,
@@ -277,7 +277,8 @@ def _from_arrays(path: Path, stored: dict) -> ShapeDescription:
         feature_vertices=stored["feature_vertices"], feature_agd=stored["feature_agd"],
         descriptors=stored["descriptors"], feature_geodesics=stored["feature_geodesics"],
         surface=OrientedSurface(stored["surface_points"], stored["surface_normals"],
-                                stored["surface_landmark_distances"], stored.get("surface_signature")),
+                                stored["surface_landmark_distances"], stored.get("surface_signature"),
+                                stored.get("surface_areas")),
         changes=[str(c) for c in stored["changes"]],
         timings={"cache": 0.0})
 
@@ -293,13 +294,14 @@ def _reemit(caught: list) -> list:
 
 
 # Bumped when what a description holds changes (2: the signature's scaling; 3: feature distances
-# beyond the grids from the coarse proxy; 4: AGD diffused on the full mesh), so old descriptions are
-# recomputed while other cached work (spectra, mirror maps) is kept.
-DESCRIPTION_FORMAT = 4
+# beyond the grids from the coarse proxy; 4: AGD diffused on the full mesh; 5: vertex areas for the
+# mirror test), so old descriptions are recomputed while other cached work (spectra, mirror maps)
+# is kept.
+DESCRIPTION_FORMAT = 5
 
 # What a cache entry must hold to be used (older entries without them are recomputed).
 _CACHED_KEYS = {"feature_vertices", "feature_agd", "descriptors", "feature_geodesics", "n_input_vertices",
-                "changes", "surface_points", "surface_normals", "surface_landmark_distances"}
+                "changes", "surface_points", "surface_normals", "surface_landmark_distances", "surface_areas"}
 
 
 # The parameters a shape description depends on (matching does not change it).
