@@ -79,34 +79,46 @@ def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2:
     if surface_1 is None or surface_2 is None:
         return candidates[0][1]
     best, best_total = candidates[0][1], -np.inf
+    points = mirror_test_points(surface_1, surface_2)  # the same for every candidate: drawn once
     for score, matches in candidates[:CANDIDATES_TESTED]:
-        agreement = orientation_agreement(surface_1, surface_2, matches.source, matches.target)
+        if score + ORIENTATION_WEIGHT * len(matches) <= best_total:
+            continue  # even full agreement would not beat the best so far
+        agreement = orientation_agreement(surface_1, surface_2, matches.source, matches.target, points=points)
         total = score + ORIENTATION_WEIGHT * agreement * len(matches)
         if total > best_total:
             best, best_total = matches, total
     return best
 
 
-def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface, landmarks_1: np.ndarray,
-                          landmarks_2: np.ndarray, seed: int = 0, samples: int = SAMPLES,
-                          neighbours: int = NEIGHBOURS, signature_weight: float = SIGNATURE_WEIGHT) -> float:
-    """In [-1, 1]: +1 when the correspondence ``landmarks_1[i] <-> landmarks_2[i]`` (indices into
-    the feature sets) preserves orientation everywhere, -1 when it is a mirror image; 0 when
-    fewer than 3 landmarks make the test meaningless. ``samples``, ``neighbours`` and
-    ``signature_weight`` default to the module's constants (see there)."""
-    if len(landmarks_1) < 3:
-        return 0.0
-    n1 = len(surface_1.points)
+def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface, seed: int = 0,
+                       samples: int = SAMPLES) -> tuple[np.ndarray, np.ndarray]:
+    """The orientation test's ``samples`` vertices of shape 1 and the vertices of shape 2 among
+    which their images are looked for, drawn with ``seed``."""
     rng = np.random.default_rng(seed)
     # Drawn by area: TOSCA's full-resolution humans carry most vertices in the face and hands
     # (vertex areas span a factor of 1000), and a draw by vertex left the torso and limbs,
     # where a left/right swap shows, almost untested.
-    samples = surface_samples(surface_1, samples, rng)
-    embed_1 = surface_1.landmark_distances[landmarks_1][:, samples].T  # (s, m)
+    drawn = surface_samples(surface_1, samples, rng)
     n2 = len(surface_2.points)
     # Images are looked for among at most TARGET_POINTS vertices: far finer than the test
     # triangles, and a 52k-vertex target costs no more than a 10k one.
     targets = np.sort(surface_samples(surface_2, TARGET_POINTS, rng)) if n2 > TARGET_POINTS else np.arange(n2)
+    return drawn, targets
+
+
+def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface, landmarks_1: np.ndarray,
+                          landmarks_2: np.ndarray, seed: int = 0, samples: int = SAMPLES,
+                          neighbours: int = NEIGHBOURS, signature_weight: float = SIGNATURE_WEIGHT,
+                          points: tuple[np.ndarray, np.ndarray] | None = None) -> float:
+    """In [-1, 1]: +1 when the correspondence ``landmarks_1[i] <-> landmarks_2[i]`` (indices into
+    the feature sets) preserves orientation everywhere, -1 when it is a mirror image; 0 when
+    fewer than 3 landmarks make the test meaningless. ``samples``, ``neighbours`` and
+    ``signature_weight`` default to the module's constants (see there); ``points``, the result
+    of :func:`mirror_test_points` for ``seed`` and ``samples``, saves drawing them again."""
+    if len(landmarks_1) < 3:
+        return 0.0
+    samples, targets = points if points is not None else mirror_test_points(surface_1, surface_2, seed, samples)
+    embed_1 = surface_1.landmark_distances[landmarks_1][:, samples].T  # (s, m)
     embed_2 = surface_2.landmark_distances[landmarks_2][:, targets].T  # (t, m)
     if surface_1.signature is not None and surface_2.signature is not None:
         embed_1 = np.hstack([embed_1, signature_weight * surface_1.signature[samples]])
@@ -114,15 +126,14 @@ def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface
     image = targets[cKDTree(embed_2).query(embed_1)[1]]  # each sample's image on shape 2
     x = surface_1.points[samples]
     near = cKDTree(x).query(x, k=min(neighbours, len(samples) - 1) + 1)[1][:, 1:]
-    p = np.arange(len(samples))
-    votes = []
-    for i, j in zip(*np.triu_indices(near.shape[1], k=1)):
-        q, r = near[:, i], near[:, j]
-        s1 = _corner_sine(x, surface_1.normals[samples], p, q, r)
-        s2 = _corner_sine(surface_2.points[image], surface_2.normals[image], p, q, r)
-        ok = (np.abs(s1) >= MIN_SINE) & (np.abs(s2) >= MIN_SINE)
-        votes.append(np.sign(s1[ok]) * np.sign(s2[ok]))
-    votes = np.concatenate(votes)
+    # Every triangle (sample, two of its neighbours) at once.
+    first, second = np.triu_indices(near.shape[1], k=1)
+    p = np.repeat(np.arange(len(samples)), len(first))
+    q, r = near[:, first].ravel(), near[:, second].ravel()
+    s1 = _corner_sine(x, surface_1.normals[samples][p], p, q, r)
+    s2 = _corner_sine(surface_2.points[image], surface_2.normals[image][p], p, q, r)
+    ok = (np.abs(s1) >= MIN_SINE) & (np.abs(s2) >= MIN_SINE)
+    votes = np.sign(s1[ok]) * np.sign(s2[ok])
     return float(votes.mean()) if len(votes) else 0.0
 
 
@@ -138,7 +149,8 @@ def surface_samples(surface: OrientedSurface, count: int, rng: np.random.Generat
 
 
 def _corner_sine(points, normals, p, q, r) -> np.ndarray:
-    """Signed sine of the corner at p of triangles (p, q, r) about the normal at p."""
+    """Signed sine of the corner at p of triangles (p, q, r) about ``normals`` (one per triangle,
+    the normal at p)."""
     u = points[q] - points[p]
     v = points[r] - points[p]
     cross = np.cross(u, v)
