@@ -232,6 +232,8 @@ def describe_shapes(sources: list, config: DarcyanConfig = DarcyanConfig(), repa
     import concurrent.futures
     import multiprocessing
 
+    import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the fork)
+
     # fork: the workers start with darcyan already imported (a fresh interpreter costs ~0.4 s)
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
     with concurrent.futures.ProcessPoolExecutor(min(jobs, len(todo)), multiprocessing.get_context(method)) as pool:
