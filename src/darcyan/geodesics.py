@@ -49,18 +49,16 @@ class GeodesicSolver:
 
     def distance(self, vertex: int) -> np.ndarray:
         """``(n,)`` fast-marching geodesic distance from ``vertex`` to every vertex (mesh units)."""
-        d = self._fmm.compute_distance([[(int(vertex), [])]])
-        return np.asarray(d, dtype=np.float64).reshape(-1)
+        return self.distance_from_points([(int(vertex), [])])
+
+    def distance_multi(self, vertices) -> np.ndarray:
+        """``(n,)`` distance to the nearest of several source ``vertices``."""
+        return self.distance_from_points([(int(v), []) for v in vertices])
 
     def distance_from_points(self, points: list) -> np.ndarray:
         """``(n,)`` distance to the nearest of surface ``points``, each ``(face, [b0, b1, b2])``
         (barycentric coordinates) or ``(vertex, [])``."""
         d = self._fmm.compute_distance([[p] for p in points])
-        return np.asarray(d, dtype=np.float64).reshape(-1)
-
-    def distance_multi(self, vertices) -> np.ndarray:
-        """``(n,)`` distance to the nearest of several source ``vertices``."""
-        d = self._fmm.compute_distance([[(int(v), [])] for v in vertices])
         return np.asarray(d, dtype=np.float64).reshape(-1)
 
     def trace(self, vertex: int, direction: np.ndarray, length: float) -> np.ndarray:
