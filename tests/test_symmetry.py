@@ -82,3 +82,63 @@ def test_test_points_are_drawn_uniformly_over_the_area_not_the_vertices():
     left = lambda s: float((vertices[surface_samples(s, 800, rng), 0] < 0.5).mean())  # noqa: E731
     assert abs(left(by_area) - 0.5) < 0.05
     assert abs(left(by_vertex) - np.sqrt(0.5)) < 0.05
+
+
+@pytest.mark.parametrize("dim", [3, 8, 11])
+def test_nearest_points_equals_a_kd_tree(dim):
+    from scipy.spatial import cKDTree
+
+    from darcyan.symmetry import nearest_points
+
+    rng = np.random.default_rng(dim)
+    # Far from the origin (large |p|^2 against small gaps: the screening's worst case), float32
+    # input like the cached distance fields, and queries exactly on points.
+    points = (50.0 + rng.random((3000, dim))).astype(np.float32)
+    queries = np.vstack([50.0 + rng.random((300, dim)), points[:40]]).astype(np.float32)
+    expected_distance, _ = cKDTree(points).query(queries)
+    found = nearest_points(points, queries)
+    distance = np.linalg.norm(queries.astype(np.float64) - points[found].astype(np.float64), axis=1)
+    np.testing.assert_array_equal(distance, expected_distance)
+    np.testing.assert_array_equal(found[300:], np.arange(40))
+
+
+def test_nearest_points_breaks_ties_by_the_smallest_index():
+    from darcyan.symmetry import nearest_points
+
+    points = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 5.0], [0.0, 0.0]])
+    queries = np.array([[1.0, 0.0], [0.1, 0.0], [0.0, 0.0]])  # 0 and 1 tie; 0 and 3 coincide
+    np.testing.assert_array_equal(nearest_points(points, queries), [0, 0, 0])
+
+
+def test_nearest_neighbours_equal_a_kd_tree():
+    from scipy.spatial import cKDTree
+
+    from darcyan.symmetry import nearest_neighbours
+
+    points = np.random.default_rng(1).random((500, 3))
+    expected = cKDTree(points).query(points, k=7)[1][:, 1:]
+    np.testing.assert_array_equal(nearest_neighbours(points, 6), expected)
+
+
+def test_a_cached_match_imports_no_scipy(tmp_path):
+    """The warm path's budget (0.5 s for a second match) has no room for scipy's 0.3 s import."""
+    import os
+    import subprocess
+    import sys
+
+    from darcyan.mesh import save_mesh
+    from darcyan.synthetic import figure
+
+    paths = []
+    for pose in (0, 1):
+        save_mesh(figure(pose, subdivisions=4), tmp_path / f"figure{pose}.off")
+        paths.append(str(tmp_path / f"figure{pose}.off"))
+    env = {**os.environ, "DARCYAN_CACHE": str(tmp_path / "cache")}
+    script = ("import sys; from darcyan.cli import main; code = main(['match', *sys.argv[1:], '-o', sys.argv[1] + '.csv']);"
+              " print(sorted(m for m in sys.modules if m.split('.')[0] == 'scipy'))")
+    first = subprocess.run([sys.executable, "-c", script, *paths], env=env, capture_output=True, text=True)
+    assert first.returncode == 0, first.stderr
+    assert "scipy" in first.stdout  # describing a shape does use it: the check below can fail
+    second = subprocess.run([sys.executable, "-c", script, *paths], env=env, capture_output=True, text=True)
+    assert second.returncode == 0, second.stderr
+    assert second.stdout.strip().splitlines()[-1] == "[]"

@@ -14,11 +14,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import scipy.sparse as sp
 
 from .geodesics import vertex_normals
 from .mesh import Mesh, boundary_vertices, vertex_adjacency
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 
 @dataclass(frozen=True)
@@ -78,6 +82,8 @@ def cotangent_laplacian(mesh: Mesh) -> sp.csr_matrix:
 
 def _cotangent_matrix(mesh: Mesh, cot: np.ndarray) -> sp.csr_matrix:
     """:func:`cotangent_laplacian` from the corner cotangents ``(m, 3)`` already computed."""
+    import scipy.sparse as sp  # lazily: a cached match imports no scipy
+
     f = mesh.faces
     n = mesh.n_vertices
     # Corner i's cotangent weights the edge opposite it, (f[:, i+1], f[:, i+2]), both ways; the
@@ -125,6 +131,8 @@ def principal_curvatures(mesh: Mesh, smoothing: int = 0) -> Curvatures:
 
 def smooth_vertex_fields(mesh: Mesh, fields, iterations: int, area: np.ndarray | None = None):
     """Area-weighted one-ring averaging (each vertex with its neighbours), ``iterations`` times."""
+    import scipy.sparse as sp
+
     adjacency = vertex_adjacency(mesh) + sp.identity(mesh.n_vertices, format="csr")
     if area is None:
         area = mixed_voronoi_area(mesh)

@@ -30,9 +30,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as sla
-from scipy.spatial import cKDTree
 
 from .curvature import cotangent_laplacian, mixed_voronoi_area
 from .errors import ConfigError, DarcyanError, require
@@ -207,6 +204,9 @@ def laplace_beltrami_basis(mesh: Mesh, size: int) -> tuple[np.ndarray, np.ndarra
     Returns ``eigenvalues (size,)``, ``eigenvectors (n, size)`` orthonormal for the mass, and the
     lumped mass ``(n,)`` (Meyer's mixed Voronoi areas).
     """
+    import scipy.sparse as sp  # scipy lazily, in every module: a cached match imports none of it
+    import scipy.sparse.linalg as sla
+
     size = min(size, mesh.n_vertices - 1)
     stiffness = (-cotangent_laplacian(mesh)).tocsc()
     mass = mixed_voronoi_area(mesh)
@@ -227,6 +227,8 @@ def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
     reference = np.ascontiguousarray(reference, dtype=np.float64)
     queries = np.ascontiguousarray(queries, dtype=np.float64)
     if reference.shape[1] <= KDTREE_MAX_DIM:
+        from scipy.spatial import cKDTree
+
         return cKDTree(reference).query(queries)[1].astype(np.int64)
     reference, queries = reference.astype(np.float32), queries.astype(np.float32)
     ref_sq = np.einsum("ij,ij->i", reference, reference)
@@ -416,8 +418,8 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             sample_1 = surface_sample(mesh_1, config.zoomout_samples)
             sample_2 = surface_sample(mesh_2, config.zoomout_samples)
             # The maps restricted to the samples: each image snapped to the nearest sample.
-            sub_12 = cKDTree(mesh_2.vertices[sample_2]).query(mesh_2.vertices[map_12[sample_1]])[1]
-            sub_21 = cKDTree(mesh_1.vertices[sample_1]).query(mesh_1.vertices[map_21[sample_2]])[1]
+            sub_12 = nearest_rows(mesh_2.vertices[sample_2], mesh_2.vertices[map_12[sample_1]])
+            sub_21 = nearest_rows(mesh_1.vertices[sample_1], mesh_1.vertices[map_21[sample_2]])
         else:
             sample_1, sample_2 = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
             sub_12, sub_21 = map_12, map_21

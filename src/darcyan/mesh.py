@@ -17,10 +17,14 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import scipy.sparse as sp
 
 from .errors import MeshError
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 READ_FORMATS = (".off", ".obj", ".ply", ".vert", ".tri")
 WRITE_FORMATS = (".off", ".ply")
@@ -111,6 +115,8 @@ def _edge_counts(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.nda
 def vertex_adjacency(mesh: Mesh) -> sp.csr_matrix:
     """``(n, n)`` symmetric 0/1 matrix: 1 where two vertices share an edge."""
     n, e = mesh.n_vertices, mesh.edges()
+    import scipy.sparse as sp  # lazily, like every scipy import: a cached match needs none
+
     return sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
                          shape=(n, n)).tocsr()
 
@@ -733,8 +739,10 @@ def _largest_component(mesh: Mesh) -> Mesh:
     f = mesh.faces
     rows = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
     cols = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
     graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
-    from scipy.sparse.csgraph import connected_components  # 0.06 s to import: not on the cached path
 
     n_comp, labels = connected_components(graph, directed=False)
     face_label = labels[f[:, 0]]
@@ -784,8 +792,10 @@ def nonmanifold_vertices(mesh: Mesh) -> np.ndarray:
     opposite = start[h1] == end[h2]  # the faces run the edge in opposite directions (usual case)
     rows = np.concatenate([h1, nxt[h1]])
     cols = np.concatenate([np.where(opposite, nxt[h2], h2), np.where(opposite, h2, nxt[h2])])
-    graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(3 * n_faces, 3 * n_faces))
+    import scipy.sparse as sp
     from scipy.sparse.csgraph import connected_components
+
+    graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(3 * n_faces, 3 * n_faces))
 
     _, fan = connected_components(graph, directed=False)
     fans = np.unique(f.ravel() * (3 * n_faces) + fan)  # distinct (vertex, fan) pairs
@@ -883,6 +893,8 @@ NOISE_ROUGHNESS = 1.15
 
 def _umbrella(mesh: Mesh) -> sp.csr_matrix:
     """The uniform-weight one-ring averaging operator (rows sum to 1)."""
+    import scipy.sparse as sp
+
     adjacency = vertex_adjacency(mesh)
     degree = np.maximum(np.asarray(adjacency.sum(axis=1)).ravel(), 1)
     return sp.diags(1.0 / degree) @ adjacency

@@ -15,7 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 # Sample points on the source; their spacing sets the size of the test triangles (area 1:
 # spacing about 1/sqrt(SAMPLES) = 0.035 in sqrt(area) units). Each sample makes a triangle with
@@ -90,10 +89,26 @@ def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2:
     return best
 
 
+@dataclass(frozen=True)
+class MirrorTestPoints:
+    """The points of :func:`orientation_agreement`, the same for every matching it tests.
+
+    Attributes:
+        samples: ``(s,)`` vertices of shape 1, the corners of the test triangles.
+        targets: ``(t,)`` vertices of shape 2 among which the samples' images are looked for.
+        neighbours: ``(s, k)`` each sample's ``k`` nearest other samples (positions in ``samples``).
+    """
+
+    samples: np.ndarray
+    targets: np.ndarray
+    neighbours: np.ndarray
+
+
 def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface, seed: int = 0,
-                       samples: int = SAMPLES) -> tuple[np.ndarray, np.ndarray]:
-    """The orientation test's ``samples`` vertices of shape 1 and the vertices of shape 2 among
-    which their images are looked for, drawn with ``seed``."""
+                       samples: int = SAMPLES, neighbours: int = NEIGHBOURS) -> MirrorTestPoints:
+    """The orientation test's ``samples`` vertices of shape 1, their ``neighbours`` nearest
+    samples, and the vertices of shape 2 among which their images are looked for, drawn with
+    ``seed``."""
     rng = np.random.default_rng(seed)
     # Drawn by area: TOSCA's full-resolution humans carry most vertices in the face and hands
     # (vertex areas span a factor of 1000), and a draw by vertex left the torso and limbs,
@@ -103,29 +118,32 @@ def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface, s
     # Images are looked for among at most TARGET_POINTS vertices: far finer than the test
     # triangles, and a 52k-vertex target costs no more than a 10k one.
     targets = np.sort(surface_samples(surface_2, TARGET_POINTS, rng)) if n2 > TARGET_POINTS else np.arange(n2)
-    return drawn, targets
+    near = nearest_neighbours(surface_1.points[drawn], min(neighbours, len(drawn) - 1))
+    return MirrorTestPoints(drawn, targets, near)
 
 
 def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface, landmarks_1: np.ndarray,
                           landmarks_2: np.ndarray, seed: int = 0, samples: int = SAMPLES,
                           neighbours: int = NEIGHBOURS, signature_weight: float = SIGNATURE_WEIGHT,
-                          points: tuple[np.ndarray, np.ndarray] | None = None) -> float:
+                          points: MirrorTestPoints | None = None) -> float:
     """In [-1, 1]: +1 when the correspondence ``landmarks_1[i] <-> landmarks_2[i]`` (indices into
     the feature sets) preserves orientation everywhere, -1 when it is a mirror image; 0 when
     fewer than 3 landmarks make the test meaningless. ``samples``, ``neighbours`` and
     ``signature_weight`` default to the module's constants (see there); ``points``, the result
-    of :func:`mirror_test_points` for ``seed`` and ``samples``, saves drawing them again."""
+    of :func:`mirror_test_points` for ``seed``, ``samples`` and ``neighbours``, saves drawing
+    them again."""
     if len(landmarks_1) < 3:
         return 0.0
-    samples, targets = points if points is not None else mirror_test_points(surface_1, surface_2, seed, samples)
+    if points is None:
+        points = mirror_test_points(surface_1, surface_2, seed, samples, neighbours)
+    samples, targets, near = points.samples, points.targets, points.neighbours
     embed_1 = surface_1.landmark_distances[landmarks_1][:, samples].T  # (s, m)
     embed_2 = surface_2.landmark_distances[landmarks_2][:, targets].T  # (t, m)
     if surface_1.signature is not None and surface_2.signature is not None:
         embed_1 = np.hstack([embed_1, signature_weight * surface_1.signature[samples]])
         embed_2 = np.hstack([embed_2, signature_weight * surface_2.signature[targets]])
-    image = targets[cKDTree(embed_2).query(embed_1)[1]]  # each sample's image on shape 2
+    image = targets[nearest_points(embed_2, embed_1)]  # each sample's image on shape 2
     x = surface_1.points[samples]
-    near = cKDTree(x).query(x, k=min(neighbours, len(samples) - 1) + 1)[1][:, 1:]
     # Every triangle (sample, two of its neighbours) at once.
     first, second = np.triu_indices(near.shape[1], k=1)
     p = np.repeat(np.arange(len(samples)), len(first))
@@ -157,3 +175,61 @@ def _corner_sine(points, normals, p, q, r) -> np.ndarray:
     denom = np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(denom > 0, np.einsum("ij,ij->i", cross, normals) / denom, 0.0)
+
+
+# Nearest-neighbour searches in numpy, not scipy.spatial: importing that costs more (0.3 s) than
+# a cached match's whole work, and the sets here are small (800 queries, <= 10k points).
+QUERY_BLOCK = 64  # queries per block: a (64, 10k) block of distances, 5 MB, reused
+# Multiple of the float64 unit roundoff that bounds the error of the screened distances (their
+# exact bound is a few units times (d + 3)); any point within it of the minimum is measured again.
+SCREEN_SLACK = 64
+
+
+def nearest_points(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """``(q,)`` index of the point of ``points`` ``(n, d)`` nearest to each row of ``queries``
+    ``(q, d)`` in Euclidean distance, exactly (ties: the smallest index).
+
+    Squared distances are screened as ``|p|^2 - 2 q.p`` (one matrix product per block of
+    queries, about 2x a k-d tree's time here); a query whose runner-up lies within the product's
+    rounding of its minimum is settled by measuring ``|p - q|^2`` directly.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    queries = np.asarray(queries, dtype=np.float64)
+    centre = points.mean(axis=0)  # centred, the products' rounding is smaller
+    p = points - centre
+    p_sq = np.einsum("ij,ij->i", p, p)
+    right = np.vstack([p.T, p_sq])  # (d + 1, n): [-2 q, 1] @ right = |p|^2 - 2 q.p
+    reach = float(np.sqrt(p_sq.max(initial=0.0)))
+    unit = SCREEN_SLACK * (points.shape[1] + 3) * float(np.finfo(np.float64).eps)
+    block = np.empty((min(QUERY_BLOCK, len(queries)), len(points)))  # reused: no fresh pages per block
+    out = np.empty(len(queries), np.int64)
+    for start in range(0, len(queries), QUERY_BLOCK):
+        q = queries[start:start + QUERY_BLOCK]
+        qc = q - centre
+        rows = np.arange(len(q))
+        screened = np.matmul(np.hstack([-2.0 * qc, np.ones((len(q), 1))]), right, out=block[:len(q)])
+        best = screened.argmin(axis=1)
+        low = screened[rows, best].copy()
+        tolerance = unit * (np.linalg.norm(qc, axis=1) + reach) ** 2
+        screened[rows, best] = np.inf
+        unsure = np.flatnonzero(screened.min(axis=1) <= low + tolerance)
+        screened[rows, best] = low
+        out[start:start + len(q)] = best
+        if len(unsure):
+            r, c = np.nonzero(screened[unsure] <= (low + tolerance)[unsure, None])
+            exact = ((q[unsure[r]] - points[c]) ** 2).sum(axis=1)
+            order = np.lexsort((c, exact, r))  # per query: smallest distance, then smallest index
+            first = order[np.r_[True, r[order][1:] != r[order][:-1]]]
+            out[start + unsure[r[first]]] = c[first]
+    return out
+
+
+def nearest_neighbours(points: np.ndarray, k: int) -> np.ndarray:
+    """``(n, k)`` indices of each point's ``k`` nearest other points of ``points`` ``(n, d)``,
+    nearest first (exact; for the few hundred points of the mirror test)."""
+    squared = ((points[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
+    np.fill_diagonal(squared, -1.0)  # each point first, then dropped
+    near = np.argpartition(squared, k, axis=1)[:, :k + 1]
+    order = np.argsort(np.take_along_axis(squared, near, axis=1), axis=1, kind="stable")
+    return np.take_along_axis(near, order, axis=1)[:, 1:]
+
