@@ -30,7 +30,7 @@ GRID = {
     "interpolation": [1, 2, 4],
     "curvature_smoothing": [0, 2, 4, 8],
     "agd_sources": [8, 16, 24, 48],
-    "agd_smoothing": [0.0, 0.04, 0.07, 0.1, 0.14],
+    "agd_smoothing": [0.0, 0.04, 0.07, 0.1, 0.14, 0.2, 0.3],
     "extremity_radius": [0.15, 0.25, 0.35],
 }
 MATCHINGS = ("consistent", "nearest")

@@ -63,7 +63,7 @@ class DarcyanConfig:
     curvature_smoothing: int = 4
     denoise_area_ratio: float = 1.1
     agd_sources: int = 24
-    agd_smoothing: float = 0.07
+    agd_smoothing: float = 0.14
     proxy_vertices: int = 6000
     extremity_radius: float = 0.25
     min_agd_quantile: float = 0.5
