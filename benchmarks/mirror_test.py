@@ -76,10 +76,10 @@ def main(argv=None) -> int:
         won, count = defaultdict(int), defaultdict(int)
         for cls, d1, d2, candidates, truth in cases:
             best, best_total = None, -np.inf
+            points = symmetry.mirror_test_points(d1.surface, d2.surface, samples=samples, neighbours=neighbours)
             for score, matches in candidates[:symmetry.CANDIDATES_TESTED]:
                 agreement = symmetry.orientation_agreement(d1.surface, d2.surface, matches.source, matches.target,
-                                                           samples=samples, neighbours=neighbours,
-                                                           signature_weight=weight)
+                                                           signature_weight=weight, points=points)
                 total = score + symmetry.ORIENTATION_WEIGHT * agreement * len(matches)
                 if total > best_total:
                     best, best_total = matches, total

@@ -13,7 +13,6 @@ Signs follow the outward normal: on a sphere of radius r both are +1/r; on a sad
 from __future__ import annotations
 
 from dataclasses import dataclass
-
 from typing import TYPE_CHECKING
 
 import numpy as np

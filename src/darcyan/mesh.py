@@ -16,7 +16,6 @@ import re
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -114,9 +113,9 @@ def _edge_counts(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.nda
 
 def vertex_adjacency(mesh: Mesh) -> sp.csr_matrix:
     """``(n, n)`` symmetric 0/1 matrix: 1 where two vertices share an edge."""
-    n, e = mesh.n_vertices, mesh.edges()
     import scipy.sparse as sp  # lazily, like every scipy import: a cached match needs none
 
+    n, e = mesh.n_vertices, mesh.edges()
     return sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
                          shape=(n, n)).tocsr()
 
@@ -743,7 +742,6 @@ def _largest_component(mesh: Mesh) -> Mesh:
     from scipy.sparse.csgraph import connected_components
 
     graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
-
     n_comp, labels = connected_components(graph, directed=False)
     face_label = labels[f[:, 0]]
     areas = mesh.face_areas()
@@ -796,7 +794,6 @@ def nonmanifold_vertices(mesh: Mesh) -> np.ndarray:
     from scipy.sparse.csgraph import connected_components
 
     graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(3 * n_faces, 3 * n_faces))
-
     _, fan = connected_components(graph, directed=False)
     fans = np.unique(f.ravel() * (3 * n_faces) + fan)  # distinct (vertex, fan) pairs
     return np.flatnonzero(np.bincount(fans // (3 * n_faces), minlength=mesh.n_vertices) > 1)
