@@ -32,6 +32,7 @@ GRID = {
     "agd_sources": [8, 16, 24, 48],
     "agd_smoothing": [0.0, 0.04, 0.07, 0.1, 0.14, 0.2, 0.3],
     "extremity_radius": [0.15, 0.25, 0.35],
+    "min_agd_quantile": [0.0, 0.3, 0.5],
 }
 MATCHINGS = ("consistent", "nearest")
 
