@@ -41,26 +41,41 @@ HUMAN_PAIRS = (("michael0", "michael2"), ("michael18", "michael3"), ("michael12"
 
 
 @pytest.mark.data
-def test_humans_keep_left_and_right(tosca, tmp_path):
-    from darcyan.cache import ShapeCache
+def _correct_matches(folder, a, b, cache) -> tuple[int, int]:
+    """(correct, all) matches of ``a`` -> ``b`` in ``folder`` (tosca-5k) by its vts ground truth:
+    Euclidean error under a tenth of sqrt(area), about a hand's length (a swapped hand or foot is
+    ~10x farther)."""
     from darcyan.evaluation import read_vts
     from darcyan.mesh import load_mesh
     from scipy.spatial import cKDTree
 
-    folder = tosca / "tosca-5k"
+    shape_1, shape_2 = (describe_shape(folder / f"{name}.off", DarcyanConfig(), cache=cache) for name in (a, b))
+    matches = match_shapes(shape_1, shape_2)
+    mesh_1, mesh_2 = load_mesh(folder / f"{a}.off"), load_mesh(folder / f"{b}.off")
+    vts_1, vts_2 = read_vts(folder / "corres" / f"{a}.vts"), read_vts(folder / "corres" / f"{b}.vts")
+    line = cKDTree(mesh_1.vertices[vts_1]).query(mesh_1.vertices[matches.source_vertex])[1]
+    error = np.linalg.norm(mesh_2.vertices[vts_2[line]] - mesh_2.vertices[matches.target_vertex], axis=1)
+    return int((error < 0.1 * np.sqrt(mesh_2.area())).sum()), len(matches)
+
+
+def test_humans_keep_left_and_right(tosca, tmp_path):
+    from darcyan.cache import ShapeCache
+
     cache = ShapeCache(tmp_path / "cache")
-    correct = total = 0
-    for a, b in HUMAN_PAIRS:
-        shape_1, shape_2 = (describe_shape(folder / f"{name}.off", DarcyanConfig(), cache=cache) for name in (a, b))
-        matches = match_shapes(shape_1, shape_2)
-        mesh_1, mesh_2 = load_mesh(folder / f"{a}.off"), load_mesh(folder / f"{b}.off")
-        vts_1, vts_2 = read_vts(folder / "corres" / f"{a}.vts"), read_vts(folder / "corres" / f"{b}.vts")
-        line = cKDTree(mesh_1.vertices[vts_1]).query(mesh_1.vertices[matches.source_vertex])[1]
-        error = np.linalg.norm(mesh_2.vertices[vts_2[line]] - mesh_2.vertices[matches.target_vertex], axis=1)
-        # Euclidean error against a hand's length: a swapped hand or foot is ~10x farther.
-        correct += int((error < 0.1 * np.sqrt(mesh_2.area())).sum())
-        total += len(matches)
+    counts = np.array([_correct_matches(tosca / "tosca-5k", a, b, cache) for a, b in HUMAN_PAIRS])
+    correct, total = counts.sum(axis=0)
     assert total >= 20 and correct / total >= 0.9, (correct, total)
+
+
+def test_true_matching_ranked_below_the_eighth_candidate_is_still_found(tosca, tmp_path):
+    """In these tosca-5k dog pairs the layout score ranks the true matching of all six feature
+    points below the eighth candidate (a non-repeatable point's place moves it down); the mirror
+    test weighs the best 16, and finds it (with 8: 3 of 6 correct in each)."""
+    from darcyan.cache import ShapeCache
+
+    cache = ShapeCache(tmp_path / "cache")
+    for a, b in (("dog2", "dog7"), ("dog6", "dog7")):
+        assert _correct_matches(tosca / "tosca-5k", a, b, cache) == (6, 6), (a, b)
 
 
 def test_test_points_are_drawn_uniformly_over_the_area_not_the_vertices():
