@@ -70,7 +70,7 @@ def test_humans_keep_left_and_right(tosca, tmp_path):
 def test_true_matching_ranked_below_the_eighth_candidate_is_still_found(tosca, tmp_path):
     """In these tosca-5k dog pairs the layout score ranks the true matching of all six feature
     points below the eighth candidate (a non-repeatable point's place moves it down); the mirror
-    test weighs the best 16, and finds it (with 8: 3 of 6 correct in each)."""
+    test weighs the best 16, and finds it (with 8, `darcyan bench` counted 3 of 6 correct in each)."""
     from darcyan.cache import ShapeCache
 
     cache = ShapeCache(tmp_path / "cache")
