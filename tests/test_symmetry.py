@@ -149,7 +149,8 @@ def test_a_cached_match_imports_no_scipy(tmp_path):
         save_mesh(figure(pose, subdivisions=4), tmp_path / f"figure{pose}.off")
         paths.append(str(tmp_path / f"figure{pose}.off"))
     env = {**os.environ, "DARCYAN_CACHE": str(tmp_path / "cache")}
-    script = ("import sys; from darcyan.cli import main; code = main(['match', *sys.argv[1:], '-o', sys.argv[1] + '.csv']);"
+    script = ("import sys; from darcyan.cli import main;"
+              " code = main(['match', *sys.argv[1:], '-o', sys.argv[1] + '.csv']);"
               " print(sorted(m for m in sys.modules if m.split('.')[0] == 'scipy'))")
     first = subprocess.run([sys.executable, "-c", script, *paths], env=env, capture_output=True, text=True)
     assert first.returncode == 0, first.stderr
