@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from darcyan import DarcyanConfig, analyze_mesh, describe_shape, match_shapes
+from darcyan import DarcyanConfig, analyze_mesh, match_shapes
 from darcyan.mesh import Mesh
 from darcyan.symmetry import orientation_agreement
 
-from conftest import random_rotation
+from conftest import correct_matches, random_rotation
 
 
 def _same_vertex(shape_1, shape_2):
@@ -41,28 +41,11 @@ HUMAN_PAIRS = (("michael0", "michael2"), ("michael18", "michael3"), ("michael12"
 
 
 @pytest.mark.data
-def _correct_matches(folder, a, b, cache) -> tuple[int, int]:
-    """(correct, all) matches of ``a`` -> ``b`` in ``folder`` (tosca-5k) by its vts ground truth:
-    Euclidean error under a tenth of sqrt(area), about a hand's length (a swapped hand or foot is
-    ~10x farther)."""
-    from darcyan.evaluation import read_vts
-    from darcyan.mesh import load_mesh
-    from scipy.spatial import cKDTree
-
-    shape_1, shape_2 = (describe_shape(folder / f"{name}.off", DarcyanConfig(), cache=cache) for name in (a, b))
-    matches = match_shapes(shape_1, shape_2)
-    mesh_1, mesh_2 = load_mesh(folder / f"{a}.off"), load_mesh(folder / f"{b}.off")
-    vts_1, vts_2 = read_vts(folder / "corres" / f"{a}.vts"), read_vts(folder / "corres" / f"{b}.vts")
-    line = cKDTree(mesh_1.vertices[vts_1]).query(mesh_1.vertices[matches.source_vertex])[1]
-    error = np.linalg.norm(mesh_2.vertices[vts_2[line]] - mesh_2.vertices[matches.target_vertex], axis=1)
-    return int((error < 0.1 * np.sqrt(mesh_2.area())).sum()), len(matches)
-
-
 def test_humans_keep_left_and_right(tosca, tmp_path):
     from darcyan.cache import ShapeCache
 
     cache = ShapeCache(tmp_path / "cache")
-    counts = np.array([_correct_matches(tosca / "tosca-5k", a, b, cache) for a, b in HUMAN_PAIRS])
+    counts = np.array([correct_matches(tosca / "tosca-5k", a, b, cache) for a, b in HUMAN_PAIRS])
     correct, total = counts.sum(axis=0)
     assert total >= 20 and correct / total >= 0.9, (correct, total)
 
@@ -74,8 +57,9 @@ def test_true_matching_ranked_below_the_eighth_candidate_is_still_found(tosca, t
     from darcyan.cache import ShapeCache
 
     cache = ShapeCache(tmp_path / "cache")
+    every_match = DarcyanConfig(max_match_distance=0.0)  # the matching the mirror test chose, whole
     for a, b in (("dog2", "dog7"), ("dog6", "dog7")):
-        assert _correct_matches(tosca / "tosca-5k", a, b, cache) == (6, 6), (a, b)
+        assert correct_matches(tosca / "tosca-5k", a, b, cache, every_match) == (6, 6), (a, b)
 
 
 def test_test_points_are_drawn_uniformly_over_the_area_not_the_vertices():

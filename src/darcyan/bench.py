@@ -510,10 +510,13 @@ def _sparse_records(job: dict, target: _Prepared) -> list:
             matched = point_map[source.index(features)]
             distance = np.full(len(rows), np.nan)
         else:
-            # The same matcher as darcyan's (match_shapes with the run's config), other descriptors.
+            # The same matcher as darcyan's (match_shapes with the run's config), other descriptors;
+            # max_match_distance was measured on the curvature descriptor, so other descriptors
+            # keep every match.
+            config = settings.config if method == "darcyan" else settings.config.replace(max_match_distance=0.0)
             m = match_shapes(replace(src["description"], descriptors=src["descriptors"][method]),
                              replace(tgt["description"], descriptors=tgt["descriptors"][method]),
-                             settings.config).matches_12
+                             config).matches_12
             rows, matched, distance = m.source, target_features[m.target], m.distance
         seconds = time.perf_counter() - start
         score = score_pair(target.solver, matched, true_t, sym_t, target_features, settings.threshold,

@@ -36,6 +36,7 @@ CONFIG_HELP = {
     "extremity_radius": "AGD maxima are maxima within this geodesic radius",
     "min_agd_quantile": "ignore AGD maxima below this quantile of AGD",
     "max_features": "at most this many feature points, 0 = all",
+    "max_match_distance": "leave out matches whose descriptor distance exceeds this multiple of the median over all feature-point pairs, 0 = keep all",
 }
 
 

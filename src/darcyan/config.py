@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 from dataclasses import dataclass
 
 from .errors import ConfigError
@@ -56,6 +57,11 @@ class DarcyanConfig:
             preserved geodesic distances and orientation: no left/right swaps), ``"nearest"``
             (the paper: each source point takes its nearest target descriptor) or
             ``"one-to-one"`` (optimal assignment on descriptor distance alone).
+        max_match_distance: a match whose descriptor distance exceeds this multiple of the median
+            distance over all (source, target) pairs of feature points is left out: its local
+            shapes differ more than a typical pair of unrelated extremities, and only the layout
+            kept it (mostly a feature point with no counterpart on the other shape, such as a
+            cat's ear against its nose); 0 keeps every match.
     """
 
     levels: int = 6
@@ -71,6 +77,7 @@ class DarcyanConfig:
     min_agd_quantile: float = 0.3
     max_features: int = 0
     matching: str = "consistent"
+    max_match_distance: float = 1.5
 
     def __post_init__(self) -> None:
         positive_ints = ("levels", "radial_lines", "interpolation", "agd_sources")
@@ -94,6 +101,9 @@ class DarcyanConfig:
                 raise ConfigError(f"config: {name} must be a positive length (in sqrt(area)), got {value!r}")
         if not 0 <= self.min_agd_quantile < 1:
             raise ConfigError(f"config: min_agd_quantile must be in [0, 1), got {self.min_agd_quantile!r}")
+        if not (isinstance(self.max_match_distance, (int, float)) and math.isfinite(self.max_match_distance)
+                and self.max_match_distance >= 0):
+            raise ConfigError(f"config: max_match_distance must be >= 0 (0: off), got {self.max_match_distance!r}")
         if self.matching not in MATCHING_MODES:
             raise ConfigError(f"config: matching must be one of {MATCHING_MODES}, got {self.matching!r}")
 
@@ -116,7 +126,7 @@ class DarcyanConfig:
         (Its AGD floor stays at the median, where the paper columns of the README were measured:
         the floor's default came down for diffused AGD, which the paper does not use.)"""
         return cls(agd_smoothing=0.0, extremity_radius=0.15, min_agd_quantile=0.5, denoise_area_ratio=0.0,
-                   matching="nearest").replace(**changes)
+                   matching="nearest", max_match_distance=0.0).replace(**changes)
 
     @property
     def level_radii(self) -> "list[float]":

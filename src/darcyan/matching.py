@@ -66,6 +66,22 @@ def match_descriptors(desc_1: np.ndarray, desc_2: np.ndarray, mode: str = "neare
     return Matches(src.astype(np.int64), tgt.astype(np.int64), dist[src, tgt])
 
 
+def drop_dissimilar(matches: Matches, desc_1: np.ndarray, desc_2: np.ndarray, limit: float) -> Matches:
+    """``matches`` without those whose descriptor distance exceeds ``limit`` times the median
+    :func:`descriptor_distances` over all pairs of rows of ``desc_1`` and ``desc_2`` (0: all kept).
+
+    A layout-keeping matching can pair a feature point that has no counterpart on the other
+    shape (a cat's ear against its nose) with whatever fits the layout; the descriptors of such
+    a pair differ more than those of most unrelated extremities (docs/parameters.md).
+    """
+    if limit <= 0 or len(matches) == 0:
+        return matches
+    dist = descriptor_distances(desc_1, desc_2)
+    finite = dist[np.isfinite(dist)]
+    keep = matches.distance <= limit * float(np.median(finite))
+    return Matches(matches.source[keep], matches.target[keep], matches.distance[keep])
+
+
 @dataclass(frozen=True)
 class ConsistencyWeights:
     """Weights of :func:`consistent_candidates`' score (see there); all terms are dimensionless.

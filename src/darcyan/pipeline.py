@@ -25,7 +25,7 @@ from .features import AGD, FeaturePoints, average_geodesic_distance, extremities
 from .geodesics import GeodesicSolver, LocalGeodesicSolver, vertex_normals
 from .symmetry import OrientedSurface, choose_orientation, curvature_signature
 from .grid import DarcyanGrid, darcyan_grids, grid_reach
-from .matching import Matches, consistent_candidates, match_descriptors
+from .matching import Matches, consistent_candidates, drop_dissimilar, match_descriptors
 from .proxy import coarse_proxy
 from .mesh import Mesh, MeshWarning, Normalization, denoise_mesh, load_mesh, normalize_mesh, prepare_mesh
 
@@ -321,6 +321,7 @@ def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
         matches = choose_orientation(candidates, shape_1.surface, shape_2.surface)
     else:
         matches = match_descriptors(shape_1.descriptors, shape_2.descriptors, config.matching)
+    matches = drop_dissimilar(matches, shape_1.descriptors, shape_2.descriptors, config.max_match_distance)
     return Correspondence(shape_1.feature_vertices[matches.source], shape_2.feature_vertices[matches.target],
                           matches.distance, matches)
 
