@@ -66,6 +66,13 @@ def match_descriptors(desc_1: np.ndarray, desc_2: np.ndarray, mode: str = "neare
     return Matches(src.astype(np.int64), tgt.astype(np.int64), dist[src, tgt])
 
 
+def median_distance(dist: np.ndarray) -> float:
+    """Median of the finite entries of a :func:`descriptor_distances` table (NaN if none): the
+    scale of descriptor similarity in :func:`consistent_candidates` and of :func:`drop_dissimilar`."""
+    finite = dist[np.isfinite(dist)]
+    return float(np.median(finite)) if len(finite) else float("nan")
+
+
 def drop_dissimilar(matches: Matches, desc_1: np.ndarray, desc_2: np.ndarray, limit: float) -> Matches:
     """``matches`` without those whose descriptor distance exceeds ``limit`` times the median
     :func:`descriptor_distances` over all pairs of rows of ``desc_1`` and ``desc_2`` (0: all kept).
@@ -76,9 +83,7 @@ def drop_dissimilar(matches: Matches, desc_1: np.ndarray, desc_2: np.ndarray, li
     """
     if limit <= 0 or len(matches) == 0:
         return matches
-    dist = descriptor_distances(desc_1, desc_2)
-    finite = dist[np.isfinite(dist)]
-    keep = matches.distance <= limit * float(np.median(finite))
+    keep = matches.distance <= limit * median_distance(descriptor_distances(desc_1, desc_2))
     return Matches(matches.source[keep], matches.target[keep], matches.distance[keep])
 
 
@@ -127,8 +132,8 @@ def consistent_candidates(desc_1: np.ndarray, desc_2: np.ndarray, geodesics_1: n
     if k1 == 0 or k2 == 0:
         empty = np.zeros(0, np.int64)
         return [(0.0, Matches(empty, empty, np.zeros(0)))]
-    finite = dist[np.isfinite(dist)]
-    scale = float(np.median(finite)) if len(finite) and np.median(finite) > 0 else 1.0
+    median = median_distance(dist)
+    scale = median if median > 0 else 1.0  # NaN (no finite pair) fails the test too
     unary = np.where(np.isfinite(dist), 1.0 - dist / scale, -np.inf)
 
     # Sources with the most distinctive best match first: early choices steer the beam.
