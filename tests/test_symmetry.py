@@ -5,7 +5,7 @@ import pytest
 
 from darcyan import DarcyanConfig, analyze_mesh, match_shapes
 from darcyan.mesh import Mesh
-from darcyan.symmetry import orientation_agreement
+from darcyan.symmetry import handedness, orientation_agreement
 
 from conftest import correct_matches, random_rotation
 
@@ -31,6 +31,50 @@ def test_orientation_agreement_is_plus_one_for_a_motion_and_minus_one_for_a_refl
         assert agreement == pytest.approx(expected, abs=0.1)
         # The same landmarks in the wrong order are no evidence of a motion.
         assert orientation_agreement(shape.surface, described.surface, landmarks_1, landmarks_2[::-1]) < 0.6
+
+
+def test_handedness_is_plus_one_for_a_turned_profile_and_minus_one_for_its_mirror_image():
+    profiles = np.random.default_rng(0).normal(size=(3, 2, 2, 32))
+    turned = np.roll(profiles, 1, axis=-1)  # the same tips, reference direction one column off
+    mirrored = np.roll(profiles[..., ::-1], 1, axis=-1)  # angle theta read at -theta
+    np.testing.assert_allclose(np.diag(handedness(profiles, turned)), 1.0)
+    np.testing.assert_allclose(np.diag(handedness(profiles, mirrored)), -1.0)
+    # Unrelated random profiles agree in neither sense: no evidence either way.
+    off_diagonal = handedness(profiles, turned)[~np.eye(3, dtype=bool)]
+    assert np.abs(off_diagonal).max() < 0.1
+
+
+def test_handedness_of_a_mirror_symmetric_tip_is_zero():
+    angles = 2 * np.pi * np.arange(32) / 32
+    symmetric = np.broadcast_to(np.cos(angles) + 0.5 * np.cos(2 * angles), (1, 2, 2, 32))
+    assert handedness(symmetric, symmetric)[0, 0] == pytest.approx(0.0, abs=1e-12)
+    chiral = np.broadcast_to(np.cos(angles) + 0.5 * np.sin(2 * angles), (1, 2, 2, 32))
+    assert handedness(chiral, chiral)[0, 0] == pytest.approx(1.0)
+
+
+@pytest.mark.data
+def test_a_hand_in_another_pose_reads_as_the_same_hand_and_in_a_mirror_as_the_other(tosca):
+    """tosca-hires michael0 against michael1 (vertex i is the same body point in both) and
+    against michael1 reflected: the feature points on hands and feet that are chiral enough to
+    count turn the same way as their true counterparts, and the other way in the mirror."""
+    from darcyan.mesh import load_mesh
+
+    shapes = [analyze_mesh(load_mesh(tosca / "tosca-hires" / f"michael{pose}.off")) for pose in (0, 1)]
+    other = load_mesh(tosca / "tosca-hires" / "michael1.off")
+    mirrored = analyze_mesh(Mesh(other.vertices * [-1.0, 1.0, 1.0], other.faces[:, ::-1].copy()))
+    source = shapes[0]
+
+    def at_truth(target):
+        """handedness of each source feature point against the target's one nearest its truth."""
+        x = target.mesh.vertices
+        truth = np.linalg.norm(x[source.features.vertices][:, None] - x[target.features.vertices][None],
+                               axis=2).argmin(axis=1)
+        return handedness(source.surface.profiles, target.surface.profiles)[np.arange(len(truth)), truth]
+
+    same, flipped = at_truth(shapes[1]), at_truth(mirrored)
+    counted = np.abs(same) > 0.2
+    assert counted.sum() >= 3, same  # the hands and the feet
+    assert (same[counted] > 0).all() and (flipped[counted] < 0).all(), (same, flipped)
 
 
 # TOSCA humans whose hands (or hands and feet) went to the other side before the orientation test

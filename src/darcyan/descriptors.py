@@ -3,6 +3,10 @@
 For each level curve k, the mean of kmax and of kmin over its intersection points with the
 radial lines: ``[k1max, k1min, ..., knmax, knmin]``. A level whose points all left the surface
 (a boundary closer than lambda_k) is NaN, and matching compares only the levels both have.
+
+The mean over a level forgets the angle, and with it handedness: a left hand and a right hand
+give the same descriptor. :func:`angular_profiles` keeps the angular variation of the innermost
+levels, which :func:`darcyan.symmetry.handedness` compares in both turning senses.
 """
 
 from __future__ import annotations
@@ -31,3 +35,19 @@ def curvature_descriptors(mesh: Mesh, grids: list[DarcyanGrid], curvatures: Curv
     if not grids:
         return np.zeros((0, 0))
     return np.stack([curvature_descriptor(mesh, g, curvatures) for g in grids])
+
+
+def angular_profiles(mesh: Mesh, grids: list[DarcyanGrid], curvatures: Curvatures, levels: int) -> np.ndarray:
+    """``(k, 2, levels, a)``: kmax and kmin at the grid points of the innermost ``levels`` level
+    curves (all ``a = m * q`` radial lines, counter-clockwise about the outward normal from each
+    grid's reference direction), each level's mean over the angles removed (that is the
+    descriptor's part). NaN where a radial line left the surface."""
+    if not grids:
+        return np.zeros((0, 2, levels, 0))
+    out = []
+    for grid in grids:
+        profile = np.stack([grid.sample(mesh, curvatures.kmax)[:levels], grid.sample(mesh, curvatures.kmin)[:levels]])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN levels stay NaN
+            out.append(profile - np.nanmean(profile, axis=2, keepdims=True))
+    return np.stack(out)

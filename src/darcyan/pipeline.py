@@ -19,11 +19,11 @@ import numpy as np
 from .cache import ShapeCache, file_digest
 from .config import DarcyanConfig
 from .curvature import Curvatures, principal_curvatures
-from .descriptors import curvature_descriptors
+from .descriptors import angular_profiles, curvature_descriptors
 from .errors import MeshError
 from .features import AGD, FeaturePoints, average_geodesic_distance, extremities, heat_diffuse
 from .geodesics import GeodesicSolver, LocalGeodesicSolver, vertex_normals
-from .symmetry import OrientedSurface, choose_orientation, curvature_signature
+from .symmetry import PROFILE_LEVELS, OrientedSurface, choose_orientation, curvature_signature
 from .grid import DarcyanGrid, darcyan_grids, grid_reach
 from .matching import Matches, consistent_candidates, drop_dissimilar, match_descriptors
 from .proxy import coarse_proxy
@@ -173,7 +173,8 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     surface = OrientedSurface(
         normalized.vertices.astype(np.float32), vertex_normals(normalized).astype(np.float32),
         np.array([distances[int(v)] for v in features.vertices], dtype=np.float32),
-        _signature(normalized, curvatures, proxy, config).astype(np.float32), curvatures.area.astype(np.float32))
+        _signature(normalized, curvatures, proxy, config).astype(np.float32), curvatures.area.astype(np.float32),
+        angular_profiles(normalized, grids, curvatures, PROFILE_LEVELS).astype(np.float32))
     done("layout")
     return ShapeDescription(
         name=mesh.name, n_input_vertices=n_input,
@@ -280,7 +281,7 @@ def _from_arrays(path: Path, stored: dict) -> ShapeDescription:
         descriptors=stored["descriptors"], feature_geodesics=stored["feature_geodesics"],
         surface=OrientedSurface(stored["surface_points"], stored["surface_normals"],
                                 stored["surface_landmark_distances"], stored.get("surface_signature"),
-                                stored.get("surface_areas")),
+                                stored.get("surface_areas"), stored.get("surface_profiles")),
         changes=[str(c) for c in stored["changes"]],
         timings={"cache": 0.0})
 
@@ -297,13 +298,14 @@ def _reemit(caught: list) -> list:
 
 # Bumped when what a description holds changes (2: the signature's scaling; 3: feature distances
 # beyond the grids from the coarse proxy; 4: AGD diffused on the full mesh; 5: vertex areas for the
-# mirror test), so old descriptions are recomputed while other cached work (spectra, mirror maps)
+# mirror test; 6: angular curvature profiles for handedness), so old descriptions are recomputed while other cached work (spectra, mirror maps)
 # is kept.
-DESCRIPTION_FORMAT = 5
+DESCRIPTION_FORMAT = 6
 
 # What a cache entry must hold to be used (older entries without them are recomputed).
 _CACHED_KEYS = {"feature_vertices", "feature_agd", "descriptors", "feature_geodesics", "n_input_vertices",
-                "changes", "surface_points", "surface_normals", "surface_landmark_distances", "surface_areas"}
+                "changes", "surface_points", "surface_normals", "surface_landmark_distances", "surface_areas",
+                "surface_profiles"}
 
 
 # The parameters a shape description depends on (matching does not change it).

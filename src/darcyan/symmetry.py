@@ -8,10 +8,18 @@ triangles, a mirror map reverses it.
 :func:`orientation_agreement` extends a landmark correspondence to a coarse map (each point goes
 to the target point with the most similar geodesic distances to the matched landmarks) and
 measures how many small triangles of sample points keep their orientation under it.
+
+On the humans that coarse map is too rough to settle a swap of the hands or the feet alone (a
+torso's front and back have the same distances to the extremities). :func:`handedness` reads
+orientation where it is sharp: around a limb tip the curvature pattern is itself chiral (a
+hand's thumb lies on one side), and read counter-clockwise about the outward normal it matches
+the same tip's pattern on another pose turning the same way, and its mirror image's turning the
+other way.
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,6 +44,17 @@ SIGNATURE_WEIGHT = 0.9
 # gained 4 more dog matches for twice the test's time (docs/parameters.md).
 CANDIDATES_TESTED = 16
 ORIENTATION_WEIGHT = 1.0
+# Handedness: the innermost level curves of the Darcyan grid (0.02 and 0.04 from the feature
+# point with the default grid) carry the chiral detail of a tip (outer ones, a whole limb, are
+# mirror-symmetric about its axis). Profiles are compared under every rotation: at a tip the
+# grid's angle 0 (toward the shape's centre) is ill-conditioned and turns between poses and in
+# a mirror. Two profiles count only as far as they agree, in one turning sense, better than
+# PROFILE_AGREEMENT times unrelated profiles would (mean squared difference e1 + e2): an
+# animal's paw changes its profile from pose to pose, and then the sign is noise. The weight is
+# per match. Chosen on every pair of every class of both sets (docs/parameters.md).
+PROFILE_LEVELS = 2
+PROFILE_AGREEMENT = 0.6
+HANDEDNESS_WEIGHT = 2.0
 
 
 @dataclass(frozen=True)
@@ -51,6 +70,8 @@ class OrientedSurface:
             back of a torso or a limb); scaled to be comparable with the distances.
         areas: optional ``(n,)`` vertex areas; the test's points are drawn in proportion to
             them (uniformly over the surface), else uniformly over the vertices.
+        profiles: optional ``(k, 2, l, a)`` angular curvature profiles around the feature points
+            (:func:`darcyan.descriptors.angular_profiles`), for :func:`handedness`.
     """
 
     points: np.ndarray
@@ -58,6 +79,7 @@ class OrientedSurface:
     landmark_distances: np.ndarray
     signature: np.ndarray | None = None
     areas: np.ndarray | None = None
+    profiles: np.ndarray | None = None
 
 
 def curvature_signature(mesh, mean_curvature: np.ndarray) -> np.ndarray:
@@ -76,13 +98,20 @@ def curvature_signature(mesh, mean_curvature: np.ndarray) -> np.ndarray:
 def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2: OrientedSurface | None):
     """Among ``candidates`` ``[(score, Matches), ...]`` (best first, from
     :func:`darcyan.matching.consistent_candidates`), the matches with the best score plus
-    ``ORIENTATION_WEIGHT * orientation_agreement * len(matches)``: a mirror image loses against
-    the orientation-preserving matching it ties with. Without surfaces: the best score."""
+    ``ORIENTATION_WEIGHT * orientation_agreement * len(matches)`` plus ``HANDEDNESS_WEIGHT``
+    times the :func:`handedness` of its matches (when both surfaces carry profiles): a mirror
+    image, whole or partial, loses against the orientation-preserving matching it ties with.
+    Without surfaces: the best score."""
     if surface_1 is None or surface_2 is None:
         return candidates[0][1]
+    hand = None
+    if surface_1.profiles is not None and surface_2.profiles is not None:
+        hand = HANDEDNESS_WEIGHT * handedness(surface_1.profiles, surface_2.profiles)
     best, best_total = candidates[0][1], -np.inf
     points = mirror_test_points(surface_1, surface_2)  # the same for every candidate: drawn once
     for score, matches in candidates[:CANDIDATES_TESTED]:
+        if hand is not None:
+            score = score + float(hand[matches.source, matches.target].sum())
         if score + ORIENTATION_WEIGHT * len(matches) <= best_total:
             continue  # even full agreement would not beat the best so far
         agreement = orientation_agreement(surface_1, surface_2, matches.source, matches.target, points=points)
@@ -90,6 +119,40 @@ def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2:
         if total > best_total:
             best, best_total = matches, total
     return best
+
+
+def handedness(profiles_1: np.ndarray, profiles_2: np.ndarray, agreement: float = PROFILE_AGREEMENT) -> np.ndarray:
+    """``(k1, k2)`` in [-1, 1]: for feature points i of shape 1 and j of shape 2, how much better
+    i's angular profile matches j's read in the same turning sense than read in the opposite one.
+
+    With d_same and d_mirror the mean squared differences of the two profiles (each the least
+    over all rotations) and e1 + e2 their mean squares (what two unrelated
+    profiles differ by), the result is ``(d_mirror - d_same) / (d_mirror + d_same)`` times the
+    trust ``clip(1 - min(d_same, d_mirror) / (agreement * (e1 + e2)), 0, 1)``: +1 for the same
+    tip turned, -1 for its mirror image, 0 for a mirror-symmetric tip (a head on the plane of
+    symmetry) or for profiles that agree in neither sense.
+
+    Args:
+        profiles_1, profiles_2: ``(k1, 2, l, a)``, ``(k2, 2, l, a)`` from
+            :func:`darcyan.descriptors.angular_profiles` (angles counter-clockwise about the
+            outward normal, from each grid's reference direction).
+    """
+    p1 = np.asarray(profiles_1, dtype=np.float64)[:, None]
+    p2 = np.asarray(profiles_2, dtype=np.float64)[None]
+    if p1.shape[0] == 0 or p2.shape[1] == 0:
+        return np.zeros((p1.shape[0], p2.shape[1]))
+    mirrored = np.roll(p2[..., ::-1], 1, axis=-1)  # angle theta read at -theta
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # pairs with no common grid point: NaN
+        same = np.min([np.nanmean((p1 - np.roll(p2, s, axis=-1)) ** 2, axis=(2, 3, 4))
+                       for s in range(p2.shape[-1])], axis=0)
+        mirror = np.min([np.nanmean((p1 - np.roll(mirrored, s, axis=-1)) ** 2, axis=(2, 3, 4))
+                         for s in range(p2.shape[-1])], axis=0)
+        unrelated = np.nanmean(p1**2, axis=(2, 3, 4)) + np.nanmean(p2**2, axis=(2, 3, 4))
+        trust = np.clip(1.0 - np.minimum(same, mirror) / (agreement * unrelated), 0.0, 1.0)
+        # (the tiny share of `unrelated` settles an exact tie, a symmetric tip against itself, as 0)
+        out = (mirror - same) / (mirror + same + 1e-9 * unrelated) * trust
+    return np.where(np.isfinite(out), out, 0.0)  # no evidence either way
 
 
 @dataclass(frozen=True)
