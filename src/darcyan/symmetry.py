@@ -53,7 +53,7 @@ ORIENTATION_WEIGHT = 1.0
 # animal's paw changes its profile from pose to pose, and then the sign is noise. The weight is
 # per match. Chosen on every pair of every class of both sets (docs/parameters.md).
 PROFILE_LEVELS = 2
-PROFILE_AGREEMENT = 0.6
+PROFILE_AGREEMENT = 0.8
 HANDEDNESS_WEIGHT = 2.0
 
 

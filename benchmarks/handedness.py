@@ -1,0 +1,95 @@
+"""Study of handedness (darcyan.symmetry.handedness): its weight and trust against the mirror test alone.
+
+For each pair, the candidate matchings of ``consistent`` matching are scored as ``darcyan`` does
+(descriptor similarity and layout, plus the mirror test's orientation agreement at its defaults),
+plus ``weight`` times the summed handedness of their matches, the handedness computed with trust
+``agreement`` (``inf``: every profile pair fully trusted). The chosen matching then loses the
+matches whose descriptors disagree (``max_match_distance`` at its default), as in ``match_shapes``.
+
+    python benchmarks/handedness.py ../shared/data/tosca-5k --pairs ../shared/data/tosca-5k/test_pairs.txt
+    cat benchmarks/mirror_pairs_hires_*.txt > hires_pairs.txt
+    python benchmarks/handedness.py ../shared/data/tosca-hires --pairs hires_pairs.txt
+
+prints one row per setting, per class: pairs won (every kept match goes to the target feature
+point nearest its true correspondent, as in ``mirror_test.py``) and the share of kept matches
+that do. Weight 0 is darcyan without handedness; the default is marked. Descriptions come from
+the per-shape cache ($DARCYAN_CACHE).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+from darcyan import DarcyanConfig
+from darcyan.bench import default_pairs, discover_dataset, read_pairs, shape_class
+from darcyan.cache import ShapeCache
+from darcyan.matching import consistent_candidates, drop_dissimilar
+from darcyan.pipeline import describe_shape
+from darcyan import symmetry
+
+from mirror_test import oracle
+
+WEIGHTS = (0.0, 0.5, 1.0, 2.0, 4.0)
+AGREEMENTS = (0.6, 0.8, 1.0, np.inf)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("dataset")
+    parser.add_argument("--pairs")
+    parser.add_argument("--weights", nargs="*", type=float, default=WEIGHTS)
+    parser.add_argument("--agreements", nargs="*", type=float, default=AGREEMENTS)
+    args = parser.parse_args(argv)
+    root = Path(args.dataset)
+    dataset = discover_dataset(root)
+    pairs = read_pairs(args.pairs, dataset) if args.pairs else default_pairs(dataset)
+    config, cache = DarcyanConfig(), ShapeCache()
+    cases, described = [], {}
+    for number, (source, target) in enumerate(pairs, 1):
+        for name in (source, target):
+            if name not in described:
+                described[name] = describe_shape(dataset.shapes[name], config, cache=cache)
+        d1, d2 = described[source], described[target]
+        candidates = consistent_candidates(d1.descriptors, d2.descriptors, d1.feature_geodesics,
+                                           d2.feature_geodesics)[:symmetry.CANDIDATES_TESTED]
+        points = symmetry.mirror_test_points(d1.surface, d2.surface)
+        base = [score + symmetry.ORIENTATION_WEIGHT * len(matches) * symmetry.orientation_agreement(
+                    d1.surface, d2.surface, matches.source, matches.target, points=points)
+                for score, matches in candidates]
+        cases.append((shape_class(source), d1, d2, candidates, base, oracle(root, source, target, d1, d2)))
+        print(f"\r{number}/{len(pairs)} pairs", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    classes = sorted({c[0] for c in cases})
+    print("| weight | agreement | " + " | ".join(classes) + " | all |")
+    print("| ---: | ---: | " + " | ".join("---:" for _ in classes) + " | ---: |")
+    for agreement in args.agreements:
+        hands = [symmetry.handedness(d1.surface.profiles, d2.surface.profiles, agreement) for _, d1, d2, *_ in cases]
+        for weight in args.weights:
+            if weight == 0 and agreement != args.agreements[0]:
+                continue  # the same row for every agreement
+            won, count, right, kept = (defaultdict(int) for _ in range(4))
+            for (cls, d1, d2, candidates, base, truth), hand in zip(cases, hands):
+                totals = [b + weight * hand[m.source, m.target].sum() for b, (_, m) in zip(base, candidates)]
+                chosen = candidates[int(np.argmax(totals))][1]
+                chosen = drop_dissimilar(chosen, d1.descriptors, d2.descriptors, config.max_match_distance)
+                good = truth[chosen.source] == chosen.target
+                won[cls] += bool(good.all())
+                count[cls] += 1
+                right[cls] += int(good.sum())
+                kept[cls] += len(good)
+            default = weight == symmetry.HANDEDNESS_WEIGHT and agreement == symmetry.PROFILE_AGREEMENT
+            cells = [f"{won[c]}/{count[c]} ({right[c] / max(kept[c], 1):.3f})" for c in classes]
+            total = f"{sum(won.values())}/{len(cases)} ({sum(right.values()) / max(sum(kept.values()), 1):.3f})"
+            label = "-" if weight == 0 else f"{agreement:g}"
+            print(f"| {weight:g}{' (default)' if default else ''} | {label} | " + " | ".join(cells) + f" | {total} |",
+                  flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
