@@ -42,6 +42,8 @@ def test_handedness_is_plus_one_for_a_turned_profile_and_minus_one_for_its_mirro
     # Unrelated random profiles agree in neither sense: no evidence either way.
     off_diagonal = handedness(profiles, turned)[~np.eye(3, dtype=bool)]
     assert np.abs(off_diagonal).max() < 0.1
+    # Grids of another size (other levels or radial lines) cannot be compared.
+    assert not handedness(profiles, turned[..., :16]).any()
 
 
 def test_handedness_of_a_mirror_symmetric_tip_is_zero():

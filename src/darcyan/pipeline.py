@@ -298,8 +298,8 @@ def _reemit(caught: list) -> list:
 
 # Bumped when what a description holds changes (2: the signature's scaling; 3: feature distances
 # beyond the grids from the coarse proxy; 4: AGD diffused on the full mesh; 5: vertex areas for the
-# mirror test; 6: angular curvature profiles for handedness), so old descriptions are recomputed while other cached work (spectra, mirror maps)
-# is kept.
+# mirror test; 6: angular curvature profiles for handedness), so old descriptions are recomputed
+# while other cached work (spectra, mirror maps) is kept.
 DESCRIPTION_FORMAT = 6
 
 # What a cache entry must hold to be used (older entries without them are recomputed).

@@ -126,8 +126,8 @@ def handedness(profiles_1: np.ndarray, profiles_2: np.ndarray, agreement: float 
     i's angular profile matches j's read in the same turning sense than read in the opposite one.
 
     With d_same and d_mirror the mean squared differences of the two profiles (each the least
-    over all rotations) and e1 + e2 their mean squares (what two unrelated
-    profiles differ by), the result is ``(d_mirror - d_same) / (d_mirror + d_same)`` times the
+    over all rotations) and e1 + e2 their mean squares (what two unrelated profiles differ by),
+    the result is ``(d_mirror - d_same) / (d_mirror + d_same)`` times the
     trust ``clip(1 - min(d_same, d_mirror) / (agreement * (e1 + e2)), 0, 1)``: +1 for the same
     tip turned, -1 for its mirror image, 0 for a mirror-symmetric tip (a head on the plane of
     symmetry) or for profiles that agree in neither sense.
@@ -135,11 +135,13 @@ def handedness(profiles_1: np.ndarray, profiles_2: np.ndarray, agreement: float 
     Args:
         profiles_1, profiles_2: ``(k1, 2, l, a)``, ``(k2, 2, l, a)`` from
             :func:`darcyan.descriptors.angular_profiles` (angles counter-clockwise about the
-            outward normal, from each grid's reference direction).
+            outward normal, from each grid's reference direction). Profiles of differently
+            sized grids (descriptions made with other ``levels`` or ``radial_lines``) are no
+            evidence: all zeros.
     """
     p1 = np.asarray(profiles_1, dtype=np.float64)[:, None]
     p2 = np.asarray(profiles_2, dtype=np.float64)[None]
-    if p1.shape[0] == 0 or p2.shape[1] == 0:
+    if p1.shape[0] == 0 or p2.shape[1] == 0 or p1.shape[2:] != p2.shape[2:]:
         return np.zeros((p1.shape[0], p2.shape[1]))
     mirrored = np.roll(p2[..., ::-1], 1, axis=-1)  # angle theta read at -theta
     with warnings.catch_warnings():
