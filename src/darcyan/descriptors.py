@@ -20,14 +20,18 @@ from .grid import DarcyanGrid
 from .mesh import Mesh
 
 
+def curvature_samples(mesh: Mesh, grid: DarcyanGrid, curvatures: Curvatures) -> np.ndarray:
+    """``(2, n, m * q)``: kmax and kmin at every point of one grid (1/mesh length; NaN where
+    missing); the descriptor averages it over the angles, the angular profile keeps them."""
+    return np.stack([grid.sample(mesh, curvatures.kmax), grid.sample(mesh, curvatures.kmin)])
+
+
 def curvature_descriptor(mesh: Mesh, grid: DarcyanGrid, curvatures: Curvatures) -> np.ndarray:
     """``(2n,)`` descriptor ``[k1max, k1min, ..., knmax, knmin]`` of one grid (1/mesh length)."""
-    kmax = grid.sample(mesh, curvatures.kmax)
-    kmin = grid.sample(mesh, curvatures.kmin)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN levels stay NaN on purpose
-        per_level = np.stack([np.nanmean(kmax, axis=1), np.nanmean(kmin, axis=1)], axis=1)
-    return per_level.reshape(-1)
+        per_level = np.nanmean(curvature_samples(mesh, grid, curvatures), axis=2)  # (2, n)
+    return per_level.T.reshape(-1)
 
 
 def curvature_descriptors(mesh: Mesh, grids: list[DarcyanGrid], curvatures: Curvatures) -> np.ndarray:
@@ -46,7 +50,7 @@ def angular_profiles(mesh: Mesh, grids: list[DarcyanGrid], curvatures: Curvature
         return np.zeros((0, 2, levels, 0))
     out = []
     for grid in grids:
-        profile = np.stack([grid.sample(mesh, curvatures.kmax)[:levels], grid.sample(mesh, curvatures.kmin)[:levels]])
+        profile = curvature_samples(mesh, grid, curvatures)[:, :levels]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN levels stay NaN
             out.append(profile - np.nanmean(profile, axis=2, keepdims=True))

@@ -143,7 +143,7 @@ def handedness(profiles_1: np.ndarray, profiles_2: np.ndarray, agreement: float 
     p2 = np.asarray(profiles_2, dtype=np.float64)[None]
     if p1.shape[0] == 0 or p2.shape[1] == 0 or p1.shape[2:] != p2.shape[2:]:
         return np.zeros((p1.shape[0], p2.shape[1]))
-    mirrored = np.roll(p2[..., ::-1], 1, axis=-1)  # angle theta read at -theta
+    mirrored = p2[..., ::-1]  # read backwards: angle theta at -theta, up to a rotation (all are tried)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # pairs with no common grid point: NaN
         same = np.min([np.nanmean((p1 - np.roll(p2, s, axis=-1)) ** 2, axis=(2, 3, 4))
