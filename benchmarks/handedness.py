@@ -28,6 +28,7 @@ import numpy as np
 from darcyan import DarcyanConfig
 from darcyan.bench import default_pairs, discover_dataset, read_pairs, shape_class
 from darcyan.cache import ShapeCache
+from darcyan.errors import DarcyanError
 from darcyan.matching import consistent_candidates, drop_dissimilar
 from darcyan.pipeline import describe_shape
 from darcyan import symmetry
@@ -92,4 +93,7 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except DarcyanError as error:  # a missing dataset or pair: one line, not a traceback
+        sys.exit(f"{Path(sys.argv[0]).name}: error: {error}")

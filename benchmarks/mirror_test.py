@@ -26,6 +26,7 @@ from scipy.spatial import cKDTree
 from darcyan import DarcyanConfig, load_mesh
 from darcyan.bench import default_pairs, discover_dataset, read_pairs, shape_class
 from darcyan.cache import ShapeCache
+from darcyan.errors import DarcyanError
 from darcyan.evaluation import read_vts
 from darcyan.matching import consistent_candidates
 from darcyan.pipeline import describe_shape
@@ -93,4 +94,7 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except DarcyanError as error:  # a missing dataset or pair: one line, not a traceback
+        sys.exit(f"{Path(sys.argv[0]).name}: error: {error}")
