@@ -49,17 +49,28 @@ def test_max_match_distance_must_be_a_finite_non_negative_number(value):
 
 @pytest.mark.data
 def test_a_cat_head_point_without_counterpart_is_left_unmatched(tosca, tmp_path):
-    """In these tosca-5k pairs cat2's head point (on one ear) has no counterpart among the
-    target's feature points (theirs sits on the nose); the layout still paired it with one, whose
-    descriptor is farther than 1.5 median distances, and `darcyan bench` counted 5 of 6 correct.
-    Left out, the other five stay and are all correct."""
+    """In these tosca-5k pairs, feature points taken as the AGD's maxima alone (``tip_gain`` 0)
+    put cat2's head point on one ear, the target's on the nose: no counterpart. The layout still
+    paired it with one, whose descriptor is farther than 1.5 median distances, and `darcyan
+    bench` counted 5 of 6 correct. Left out, the other five stay and are all correct."""
     from darcyan.cache import ShapeCache
 
     cache = ShapeCache(tmp_path / "cache")
     for a, b in (("cat2", "cat9"), ("cat2", "cat7")):
-        assert correct_matches(tosca / "tosca-5k", a, b, cache, threshold=0.05) == (5, 5), (a, b)
-        keep_all = DarcyanConfig(max_match_distance=0.0)
+        ears = DarcyanConfig(tip_gain=0.0)
+        assert correct_matches(tosca / "tosca-5k", a, b, cache, ears, threshold=0.05) == (5, 5), (a, b)
+        keep_all = ears.replace(max_match_distance=0.0)
         assert correct_matches(tosca / "tosca-5k", a, b, cache, keep_all, threshold=0.05) == (5, 6), (a, b)
+
+
+def test_cat_head_point_on_the_nose_in_every_pose_matches(tosca, tmp_path):
+    """The same pairs with the default feature points: cat2's head point moves from its ear to
+    the nose (the sharpest tip of the head), where the targets' lie, and all six match."""
+    from darcyan.cache import ShapeCache
+
+    cache = ShapeCache(tmp_path / "cache")
+    for a, b in (("cat2", "cat9"), ("cat2", "cat7")):
+        assert correct_matches(tosca / "tosca-5k", a, b, cache, threshold=0.05) == (6, 6), (a, b)
 
 
 def test_shape_matches_its_moved_renumbered_copy_exactly(figure_poses):

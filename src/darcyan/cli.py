@@ -35,6 +35,9 @@ CONFIG_HELP = {
     "proxy_vertices": "AGD of larger meshes is computed on a copy decimated to this many vertices, 0 = never",
     "extremity_radius": "AGD maxima are maxima within this geodesic radius",
     "min_agd_quantile": "ignore AGD maxima below this quantile of AGD",
+    "tip_gain": "move a feature point to its extremity's sharpest tip (heat kernel at the AGD smoothing's scale) where that is this many times sharper, 0 = never",
+    "tip_radius": "an extremity's top lies within this geodesic radius of its feature point",
+    "tip_agd_drop": "an extremity's top: the vertices within --tip-radius whose AGD is at most this much below the feature point's",
     "max_features": "at most this many feature points, 0 = all",
     "max_match_distance": "leave out matches whose descriptor distance exceeds this multiple of the median over all feature-point pairs, 0 = keep all",
 }
@@ -49,7 +52,7 @@ def _add_config_options(parser: argparse.ArgumentParser) -> None:
                            help=f"{text} (default {value})")
     group.add_argument("--paper", action="store_true",
                        help="the paper's method as published: plain AGD maxima (--agd-smoothing 0 --extremity-radius "
-                            "0.15), no denoising and nearest-descriptor matching; options given beside it still apply")
+                            "0.15 --tip-gain 0), no denoising and nearest-descriptor matching; options given beside it still apply")
     parser.add_argument("--repair", action="store_true", help="drop duplicate/degenerate faces and unreferenced vertices instead of refusing them")
     parser.add_argument("--no-cache", action="store_true", help="do not read or write the per-shape cache ($DARCYAN_CACHE)")
 

@@ -48,6 +48,14 @@ class DarcyanConfig:
             full mesh).
         extremity_radius: a feature point is a vertex whose AGD is the largest within this
             geodesic radius (greedy non-maximum suppression over one-ring maxima).
+        tip_gain: each feature point moves, within its extremity's top, to the vertex where the
+            heat kernel at the time of ``agd_smoothing`` is largest, if it is at least this many
+            times the point's own (see :func:`darcyan.features.sharpest_tips`): the cat's nose
+            instead of whichever of nose and ears a stretched body makes highest; 0 disables it
+            (as does ``agd_smoothing`` 0).
+        tip_radius: the extremity's top lies within this geodesic distance of the feature point.
+        tip_agd_drop: the extremity's top: the vertices within ``tip_radius`` whose AGD is at
+            most this much below the feature point's (sqrt(area) units).
         min_agd_quantile: one-ring maxima whose AGD is below this quantile of the AGD over the
             vertices are discarded: extremities are far from everything, dents are not. Below
             the median because diffusion lowers the peak of a short limb most (a cat's front
@@ -75,6 +83,9 @@ class DarcyanConfig:
     proxy_vertices: int = 6000
     extremity_radius: float = 0.25
     min_agd_quantile: float = 0.3
+    tip_gain: float = 1.1
+    tip_radius: float = 0.35
+    tip_agd_drop: float = 0.03
     max_features: int = 0
     matching: str = "consistent"
     max_match_distance: float = 1.5
@@ -95,7 +106,11 @@ class DarcyanConfig:
             raise ConfigError(f"config: agd_smoothing must be a length >= 0, got {self.agd_smoothing!r}")
         if not (isinstance(self.denoise_area_ratio, (int, float)) and self.denoise_area_ratio >= 0):
             raise ConfigError(f"config: denoise_area_ratio must be >= 0 (0: off), got {self.denoise_area_ratio!r}")
-        for name in ("radius", "extremity_radius"):
+        if not (isinstance(self.tip_gain, (int, float)) and (self.tip_gain == 0 or 1 <= self.tip_gain < 100)):
+            raise ConfigError(f"config: tip_gain must be 0 (off) or a factor >= 1, got {self.tip_gain!r}")
+        if not (isinstance(self.tip_agd_drop, (int, float)) and 0 <= self.tip_agd_drop < 10):
+            raise ConfigError(f"config: tip_agd_drop must be a length >= 0, got {self.tip_agd_drop!r}")
+        for name in ("radius", "extremity_radius", "tip_radius"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and 0 < value < 10):
                 raise ConfigError(f"config: {name} must be a positive length (in sqrt(area)), got {value!r}")
@@ -125,7 +140,7 @@ class DarcyanConfig:
         """The paper's method as published: plain AGD maxima, no denoising, nearest-descriptor matching.
         (Its AGD floor stays at the median, where the paper columns of the README were measured:
         the floor's default came down for diffused AGD, which the paper does not use.)"""
-        return cls(agd_smoothing=0.0, extremity_radius=0.15, min_agd_quantile=0.5, denoise_area_ratio=0.0,
+        return cls(agd_smoothing=0.0, extremity_radius=0.15, min_agd_quantile=0.5, denoise_area_ratio=0.0, tip_gain=0.0,
                    matching="nearest", max_match_distance=0.0).replace(**changes)
 
     @property

@@ -4,6 +4,12 @@ AGD(v) is the mean geodesic distance from v to every point of the surface (Hilag
 Zhang et al. 2005); it is largest at the tips of limbs, head and tail. Computing it exactly needs
 one distance field per vertex, so it is approximated from a few sources spread by farthest-point
 sampling, each weighted by the area of its geodesic Voronoi cell: memory stays O(V x sources).
+
+AGD is global: where a body stretches from pose to pose (the TOSCA cat's neck and back), its
+values at the tips of one extremity (a cat's nose and ears) trade places, and the highest of them
+jumps. :func:`sharpest_tips` then moves each feature point, within its extremity, to where the heat
+kernel (Sun et al. 2009's HKS at one time) is clearly highest: a local, intrinsic measure of how
+sharp a tip is, which a stretch elsewhere leaves alone.
 """
 
 from __future__ import annotations
@@ -111,6 +117,27 @@ def one_ring_maxima(mesh: Mesh, values: np.ndarray) -> np.ndarray:
     return np.flatnonzero(values >= neighbour_max)
 
 
+def heat_kernel_diagonal(mesh: Mesh, length: float) -> np.ndarray:
+    """``(n,)`` ``k_t(v, v) = sum_i exp(-lambda_i t) phi_i(v)^2`` at ``t = length**2 / 2`` (the
+    heat kernel signature at one time; 1/area units) from the Laplace-Beltrami eigenpairs whose
+    ``exp(-lambda t)`` exceeds ``exp(-HEAT_KERNEL_DECAY)`` (Weyl's law: about
+    ``HEAT_KERNEL_DECAY / (4 pi t)`` of them on a surface of area 1)."""
+    from .baselines import laplace_beltrami_spectrum
+
+    time = length**2 / 2
+    count = int(np.clip(np.ceil(HEAT_KERNEL_DECAY * mesh_area(mesh) / (4 * np.pi * time)), 10, 400))
+    spectrum = laplace_beltrami_spectrum(mesh, count)
+    return (spectrum.vectors**2 * np.exp(-spectrum.values * time)).sum(axis=1)
+
+
+# exp(-8) = 3e-4: the eigenpairs beyond add less than that to the heat kernel at the chosen time.
+HEAT_KERNEL_DECAY = 8.0
+
+
+def mesh_area(mesh: Mesh) -> float:
+    return float(mesh.face_areas().sum())
+
+
 def extremities(mesh: Mesh, solver: GeodesicSolver | LocalGeodesicSolver, agd: AGD, config: DarcyanConfig,
                 distance_cache: dict | None = None) -> FeaturePoints:
     """Local maxima of AGD over a geodesic ball of radius ``config.extremity_radius``.
@@ -146,3 +173,30 @@ def extremities(mesh: Mesh, solver: GeodesicSolver | LocalGeodesicSolver, agd: A
             break
     kept_arr = np.array(kept, dtype=np.int64)
     return FeaturePoints(kept_arr, values[kept_arr])
+
+
+def sharpest_tips(features: FeaturePoints, values: np.ndarray, heat: np.ndarray, distances: dict,
+                  config: DarcyanConfig) -> FeaturePoints:
+    """Move each feature point to the sharpest tip of its extremity.
+
+    The extremity's top is the part of the feature point's geodesic ball of radius
+    ``config.tip_radius`` whose AGD ``values (n,)`` lie within ``config.tip_agd_drop`` of the
+    point's; the point moves to the vertex of the top with the largest ``heat (n,)``
+    (:func:`heat_kernel_diagonal`) if that beats the point's own by the factor
+    ``config.tip_gain`` and lies farther than ``config.extremity_radius`` from every other
+    feature point; it stays otherwise (a hand's fingertips are no sharper than its middle at this
+    scale: it stays put). ``distances`` holds each feature point's distance field (from
+    :func:`extremities`, computed at least to ``tip_radius``). Returned in decreasing AGD.
+    """
+    found = [int(v) for v in features.vertices]
+    kept = list(found)
+    for i, v in enumerate(found):
+        d = distances[v]
+        top = np.flatnonzero((d <= config.tip_radius) & (values >= values[v] - config.tip_agd_drop))
+        u = int(top[np.argmax(heat[top])])
+        apart = all(distances[w][u] > config.extremity_radius for w in found if w != v)
+        if heat[u] >= config.tip_gain * heat[v] and apart:
+            kept[i] = u
+    vertices = np.array(kept, dtype=np.int64)
+    vertices = vertices[np.argsort(-values[vertices], kind="stable")]
+    return FeaturePoints(vertices, values[vertices])

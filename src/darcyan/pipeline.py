@@ -21,7 +21,8 @@ from .config import DarcyanConfig
 from .curvature import Curvatures, principal_curvatures
 from .descriptors import angular_profiles, curvature_descriptors
 from .errors import MeshError
-from .features import AGD, FeaturePoints, average_geodesic_distance, extremities, heat_diffuse
+from .features import (AGD, FeaturePoints, average_geodesic_distance, extremities, heat_diffuse,
+                       heat_kernel_diagonal, sharpest_tips)
 from .geodesics import GeodesicSolver, LocalGeodesicSolver, vertex_normals
 from .symmetry import PROFILE_LEVELS, OrientedSurface, choose_orientation, curvature_signature
 from .grid import DarcyanGrid, darcyan_grids, grid_reach
@@ -152,12 +153,19 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     done("agd")
     stage("features")
     # Exact geodesics only where extremities and grids look; beyond, the proxy's estimate.
-    local = LocalGeodesicSolver(solver, max(config.extremity_radius, grid_reach(config)),
+    local = LocalGeodesicSolver(solver, max(config.extremity_radius, config.tip_radius, grid_reach(config)),
                                 None if proxy is None else proxy.distance)
     distances: dict = {}
     features = extremities(normalized, local, agd, config, distances)
     if len(features) == 0:
         raise MeshError(mesh.name, "no feature points found (no extremity stands out on this shape)")
+    if config.tip_gain > 0 and config.agd_smoothing > 0:
+        heat_proxy = proxy
+        if proxy is None or proxy.mesh.n_vertices < HEAT_KERNEL_VERTICES:
+            heat_proxy = coarse_proxy(normalized, HEAT_KERNEL_VERTICES)
+        heat = (heat_kernel_diagonal(normalized, config.agd_smoothing) if heat_proxy is None
+                else heat_proxy.to_full(heat_kernel_diagonal(heat_proxy.mesh, config.agd_smoothing)))
+        features = sharpest_tips(features, agd.values, heat, distances, config)
     done("features")
     stage("descriptors")
     centre_vertex = int(np.argmin(agd.values))
@@ -298,9 +306,15 @@ def _reemit(caught: list) -> list:
 
 # Bumped when what a description holds changes (2: the signature's scaling; 3: feature distances
 # beyond the grids from the coarse proxy; 4: AGD diffused on the full mesh; 5: vertex areas for the
-# mirror test; 6: angular curvature profiles for handedness), so old descriptions are recomputed
+# mirror test; 6: angular curvature profiles for handedness; 7: feature points moved to the
+# sharpest tip of their extremity), so old descriptions are recomputed
 # while other cached work (spectra, mirror maps) is kept.
-DESCRIPTION_FORMAT = 6
+DESCRIPTION_FORMAT = 7
+
+# The heat kernel that picks each extremity's sharpest tip is computed on the AGD's proxy, or on a
+# copy of at least this many vertices if the proxy is coarser: on 1500 vertices (tosca-5k michael)
+# it moved a hand in 2 of 8 poses and missed the head in another, which 5000 do not.
+HEAT_KERNEL_VERTICES = 5000
 
 # What a cache entry must hold to be used (older entries without them are recomputed).
 _CACHED_KEYS = {"feature_vertices", "feature_agd", "descriptors", "feature_geodesics", "n_input_vertices",
@@ -311,7 +325,7 @@ _CACHED_KEYS = {"feature_vertices", "feature_agd", "descriptors", "feature_geode
 # The parameters a shape description depends on (matching does not change it).
 DESCRIBE_FIELDS = ("levels", "radial_lines", "radius", "interpolation", "curvature_smoothing",
                    "agd_sources", "agd_smoothing", "extremity_radius", "min_agd_quantile", "max_features",
-                   "proxy_vertices", "denoise_area_ratio")
+                   "proxy_vertices", "denoise_area_ratio", "tip_gain", "tip_radius", "tip_agd_drop")
 
 
 def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
