@@ -186,7 +186,8 @@ def sharpest_tips(features: FeaturePoints, values: np.ndarray, heat: np.ndarray,
     ``config.tip_gain`` and lies farther than ``config.extremity_radius`` from every other
     feature point; it stays otherwise (a hand's fingertips are no sharper than its middle at this
     scale: it stays put). ``distances`` holds each feature point's distance field (from
-    :func:`extremities`, computed at least to ``tip_radius``). Returned in decreasing AGD.
+    :func:`extremities`; beyond a :class:`LocalGeodesicSolver`'s radius its estimate does).
+    Returned in decreasing AGD.
     """
     found = [int(v) for v in features.vertices]
     kept = list(found)
