@@ -70,8 +70,10 @@ def laplacian_operators(mesh: Mesh, laplacian: str = "cotangent") -> tuple[sp.cs
     raise ConfigError(f"laplacian must be one of {LAPLACIANS}, got {laplacian!r}")
 
 
-def laplace_beltrami_spectrum(mesh: Mesh, k: int = SPECTRUM_SIZE, laplacian: str = "cotangent") -> Spectrum:
-    """The ``k`` smallest eigenpairs of ``stiffness phi = lambda mass phi`` (shift-invert ``eigsh``).
+def laplace_beltrami_spectrum(mesh: Mesh, k: int = SPECTRUM_SIZE, laplacian: str = "cotangent",
+                              tol: float = 0.0) -> Spectrum:
+    """The ``k`` smallest eigenpairs of ``stiffness phi = lambda mass phi`` (shift-invert ``eigsh``,
+    relative accuracy ``tol`` of the eigenvalues; 0: machine precision).
 
     Memory stays O(n k): one sparse factorization and the ``(n, k)`` eigenvectors.
     """
@@ -83,7 +85,7 @@ def laplace_beltrami_spectrum(mesh: Mesh, k: int = SPECTRUM_SIZE, laplacian: str
         raise MeshError(mesh.name, "mesh too small for a Laplace-Beltrami spectrum")
     mass = np.where(mass > 0, mass, mass[mass > 0].min(initial=1e-12))
     try:
-        values, vectors = eigsh(stiffness, k=k, M=sp.diags(mass).tocsc(), sigma=SHIFT, which="LM")
+        values, vectors = eigsh(stiffness, k=k, M=sp.diags(mass).tocsc(), sigma=SHIFT, which="LM", tol=tol)
     except (RuntimeError, ValueError) as exc:
         raise MeshError(mesh.name, f"Laplace-Beltrami eigenproblem failed ({exc})") from None
     order = np.argsort(values)
