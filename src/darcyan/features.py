@@ -121,7 +121,10 @@ def heat_kernel_diagonal(mesh: Mesh, length: float) -> np.ndarray:
     """``(n,)`` ``k_t(v, v) = sum_i exp(-lambda_i t) phi_i(v)^2`` at ``t = length**2 / 2`` (the
     heat kernel signature at one time; 1/area units) from the Laplace-Beltrami eigenpairs whose
     ``exp(-lambda t)`` exceeds ``exp(-HEAT_KERNEL_DECAY)`` (Weyl's law: about
-    ``HEAT_KERNEL_DECAY / (4 pi t)`` of them on a surface of area 1)."""
+    ``HEAT_KERNEL_DECAY / (4 pi t)`` of them on a surface of area 1). Unlike the HKS baseline
+    (:func:`darcyan.baselines.heat_kernel_signature`: many times, scaled by the heat trace,
+    without the constant eigenfunction) one time, unscaled, so that ratios between vertices are
+    those of the kernel itself."""
     from .baselines import laplace_beltrami_spectrum
 
     time = length**2 / 2

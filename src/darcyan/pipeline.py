@@ -162,11 +162,7 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     if len(features) == 0:
         raise MeshError(mesh.name, "no feature points found (no extremity stands out on this shape)")
     if config.tip_gain > 0 and config.agd_smoothing > 0:
-        heat_proxy = proxy
-        if proxy is None or proxy.mesh.n_vertices < HEAT_KERNEL_VERTICES:
-            heat_proxy = coarse_proxy(normalized, HEAT_KERNEL_VERTICES)
-        heat = (heat_kernel_diagonal(normalized, config.agd_smoothing) if heat_proxy is None
-                else heat_proxy.to_full(heat_kernel_diagonal(heat_proxy.mesh, config.agd_smoothing)))
+        heat = _heat_kernel(normalized, proxy, config)
         features = sharpest_tips(features, agd.values, heat, distances, config)
     done("features")
     stage("descriptors")
@@ -193,6 +189,16 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
         changes=changes, timings=timings, mesh=normalized,
         normalization=normalization, curvatures=curvatures, agd=agd, features=features, grids=grids,
         solver=solver)
+
+
+def _heat_kernel(mesh: Mesh, proxy, config: DarcyanConfig) -> np.ndarray:
+    """``(n,)`` heat kernel diagonal at the AGD diffusion's scale, on the proxy when it has at
+    least ``HEAT_KERNEL_VERTICES`` vertices, else on a copy of that size or the mesh itself."""
+    if proxy is None or proxy.mesh.n_vertices < HEAT_KERNEL_VERTICES:
+        proxy = coarse_proxy(mesh, HEAT_KERNEL_VERTICES)
+    if proxy is None:
+        return heat_kernel_diagonal(mesh, config.agd_smoothing)
+    return proxy.to_full(heat_kernel_diagonal(proxy.mesh, config.agd_smoothing))
 
 
 def _signature(mesh: Mesh, curvatures: Curvatures, proxy, config: DarcyanConfig) -> np.ndarray:

@@ -143,13 +143,14 @@ def handedness(profiles_1: np.ndarray, profiles_2: np.ndarray, agreement: float 
     p2 = np.asarray(profiles_2, dtype=np.float64)[None]
     if p1.shape[0] == 0 or p2.shape[1] == 0 or p1.shape[2:] != p2.shape[2:]:
         return np.zeros((p1.shape[0], p2.shape[1]))
-    mirrored = p2[..., ::-1]  # read backwards: angle theta at -theta, up to a rotation (all are tried)
+    def least_difference(q2):  # mean squared difference, least over every rotation of q2
+        return np.min([np.nanmean((p1 - np.roll(q2, s, axis=-1)) ** 2, axis=(2, 3, 4))
+                       for s in range(q2.shape[-1])], axis=0)
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # pairs with no common grid point: NaN
-        same = np.min([np.nanmean((p1 - np.roll(p2, s, axis=-1)) ** 2, axis=(2, 3, 4))
-                       for s in range(p2.shape[-1])], axis=0)
-        mirror = np.min([np.nanmean((p1 - np.roll(mirrored, s, axis=-1)) ** 2, axis=(2, 3, 4))
-                         for s in range(p2.shape[-1])], axis=0)
+        same = least_difference(p2)
+        mirror = least_difference(p2[..., ::-1])  # read backwards: theta at -theta, up to a rotation
         unrelated = np.nanmean(p1**2, axis=(2, 3, 4)) + np.nanmean(p2**2, axis=(2, 3, 4))
         trust = np.clip(1.0 - np.minimum(same, mirror) / (agreement * unrelated), 0.0, 1.0)
         # (the tiny share of `unrelated` settles an exact tie, a symmetric tip against itself, as 0)
