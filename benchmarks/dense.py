@@ -24,9 +24,10 @@ import time
 from pathlib import Path
 
 from darcyan import DarcyanConfig
-from darcyan.dense import DenseConfig, dense_map, evaluate_dense_maps, pyfm_own_map
-from darcyan.mesh import load_mesh
-from darcyan.pipeline import analyze_mesh, match_shapes
+from darcyan.dense.maps import DenseConfig, dense_map, pyfm_own_map
+from darcyan.eval.dense_scores import evaluate_dense_maps
+from darcyan.io.mesh_files import load_mesh
+from darcyan.method.pipeline import analyze_mesh, match_shapes
 
 REPO = Path(__file__).resolve().parents[1]
 

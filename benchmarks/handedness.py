@@ -1,4 +1,4 @@
-"""Study of handedness (darcyan.symmetry.handedness): its weight and trust against the mirror test alone.
+"""Study of handedness (darcyan.method.symmetry.handedness): its weight and trust against the mirror test alone.
 
 For each pair, the candidate matchings of ``consistent`` matching are scored as ``darcyan`` does
 (descriptor similarity and layout, plus the mirror test's orientation agreement at its defaults),
@@ -24,16 +24,15 @@ from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
+from mirror_test import oracle
 
 from darcyan import DarcyanConfig
-from darcyan.bench import default_pairs, discover_dataset, read_pairs, shape_class
-from darcyan.cache import ShapeCache
+from darcyan.bench.runner import default_pairs, discover_dataset, read_pairs, shape_class
 from darcyan.errors import DarcyanError
-from darcyan.matching import consistent_candidates, drop_dissimilar
-from darcyan.pipeline import describe_shape
-from darcyan import symmetry
-
-from mirror_test import oracle
+from darcyan.io.cache import ShapeCache
+from darcyan.method import symmetry
+from darcyan.method.matching import consistent_candidates, drop_dissimilar
+from darcyan.method.pipeline import describe_shape
 
 WEIGHTS = (0.0, 0.5, 1.0, 2.0, 4.0)
 AGREEMENTS = (0.6, 0.8, 1.0, np.inf)

@@ -1,4 +1,4 @@
-"""Study of the mirror test (darcyan.symmetry.orientation_agreement): how often the true matching wins.
+"""Study of the mirror test (darcyan.method.symmetry.orientation_agreement): how often the true matching wins.
 
 For each pair, the candidate matchings of ``consistent`` matching are scored with the mirror test
 under several settings (sample points, neighbours per test triangle, weight of the curvature
@@ -8,7 +8,7 @@ Ground truth: ``corres/{shape}.vts`` when present (nearest listed sample), else 
 
     python benchmarks/mirror_test.py ../shared/data/tosca-5k --pairs ../shared/data/tosca-5k/test_pairs.txt
 
-prints one row per setting: pairs won per class and in all. The defaults of darcyan.symmetry are
+prints one row per setting: pairs won per class and in all. The defaults of darcyan.method.symmetry are
 marked; the first row is the first version of the test (200 samples, one triangle per sample).
 Descriptions come from the per-shape cache ($DARCYAN_CACHE), so a second run is quick.
 """
@@ -24,13 +24,13 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from darcyan import DarcyanConfig, load_mesh
-from darcyan.bench import default_pairs, discover_dataset, read_pairs, shape_class
-from darcyan.cache import ShapeCache
+from darcyan.bench.runner import default_pairs, discover_dataset, read_pairs, shape_class
 from darcyan.errors import DarcyanError
-from darcyan.evaluation import read_vts
-from darcyan.matching import consistent_candidates
-from darcyan.pipeline import describe_shape
-from darcyan import symmetry
+from darcyan.eval.metrics import read_vts
+from darcyan.io.cache import ShapeCache
+from darcyan.method import symmetry
+from darcyan.method.matching import consistent_candidates
+from darcyan.method.pipeline import describe_shape
 
 # (samples, neighbours, signature weight); neighbours 2 = one triangle per sample.
 SETTINGS = [(200, 2, 0.3), (200, 6, 0.3), (400, 6, 0.3), (800, 6, 0.3), (200, 6, 0.9), (400, 6, 0.9),

@@ -62,7 +62,7 @@ def main(argv=None) -> int:
 def draw(columns: list, classes: list, path: str) -> None:
     import numpy as np
 
-    from darcyan import style
+    from darcyan.viz import style
 
     labels = classes + ["mean"]
     width = 0.8 / len(columns)

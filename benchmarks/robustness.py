@@ -26,8 +26,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from darcyan import DarcyanConfig, load_mesh, save_mesh
-from darcyan.bench import run_bench
-from darcyan.mesh import Mesh
+from darcyan.bench.runner import run_bench
+from darcyan.geometry.mesh import Mesh
 
 NOISE_LEVELS = (0.001, 0.005, 0.01)  # fractions of the bounding-box diagonal
 DECIMATION = 0.5  # fraction of the faces kept

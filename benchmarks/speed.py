@@ -24,7 +24,7 @@ What is measured, and how:
   load, prepare (checks, repair, largest component, normalization, fast-marching set-up),
   curvature, agd, features, descriptors (grids + descriptors), any stage the pipeline adds later,
   and match. The per-pair figure of a stage is the sum over the two shapes (peak: the larger).
-* Peers at the same feature points: HKS and WKS descriptors (``darcyan.baselines``, one
+* Peers at the same feature points: HKS and WKS descriptors (``darcyan.eval.baselines``, one
   Laplace-Beltrami eigendecomposition per shape) matched like darcyan's; and the dense pyfm
   pipeline of PyPI's ``pyfmaps`` (its eigenpairs, WKS descriptors, a fitted functional map and
   ZoomOut, converted to a point map). Ratio = peer time / darcyan time on the same basis
@@ -122,14 +122,15 @@ class StageMeter:
 
 
 def _load(path: str):
-    from darcyan.mesh import load_mesh
+    from darcyan.io.mesh_files import load_mesh
 
     return load_mesh(path)
 
 
 def _prepared(path: str, meter: StageMeter):
     """Load and prepare (checks, largest component, normalization), as darcyan does."""
-    from darcyan.mesh import normalize_mesh, prepare_mesh
+    from darcyan.geometry.mesh import normalize_mesh
+    from darcyan.geometry.repair import prepare_mesh
 
     meter.start("load")
     mesh = _load(path)
@@ -148,7 +149,7 @@ def _features_in(mesh, input_vertices) -> "list[int]":
 
 def child_pipeline(task: dict) -> dict:
     """Both shapes described stage by stage, then matched (darcyan, in-process)."""
-    from darcyan.pipeline import analyze_mesh, match_shapes
+    from darcyan.method.pipeline import analyze_mesh, match_shapes
 
     shapes, descriptions = [], []
     start_wall, start_cpu = time.perf_counter(), time.process_time()
@@ -172,8 +173,9 @@ def child_pipeline(task: dict) -> dict:
 
 def child_spectral(task: dict) -> dict:
     """HKS or WKS at darcyan's feature points: eigendecomposition per shape, descriptors, match."""
-    from darcyan import baselines
-    from darcyan.matching import match_descriptors
+    from darcyan.eval import baselines
+    from darcyan.geometry import spectral
+    from darcyan.method.matching import match_descriptors
 
     start_wall, start_cpu = time.perf_counter(), time.process_time()
     meter = StageMeter()
@@ -182,7 +184,7 @@ def child_spectral(task: dict) -> dict:
     for path, features in zip(task["files"], task["features"]):
         mesh = _prepared(path, meter)
         meter.start("spectrum")
-        spectrum = baselines.laplace_beltrami_spectrum(mesh)
+        spectrum = spectral.laplace_beltrami_spectrum(mesh)
         meter.start("descriptors")
         descriptors.append(baselines.spectral_descriptors(task["method"], spectrum, _features_in(mesh, features)))
         meter.stop()
@@ -197,7 +199,7 @@ def child_spectral(task: dict) -> dict:
 
 def child_pyfm(task: dict) -> dict:
     """pyfmaps' dense pipeline: its eigenpairs, WKS, functional map + ZoomOut, point map."""
-    from darcyan import baselines
+    from darcyan.eval import baselines
 
     start_wall, start_cpu = time.perf_counter(), time.process_time()
     meter = StageMeter()
@@ -224,7 +226,7 @@ def _describe_file(path: str):
     import dataclasses
     import pickle
 
-    from darcyan.pipeline import describe_shape
+    from darcyan.method.pipeline import describe_shape
 
     description = describe_shape(path)
     dropped = {}
@@ -241,7 +243,7 @@ def child_parallel(task: dict) -> dict:
     two-process ``match`` would cost on this machine)."""
     from concurrent.futures import ProcessPoolExecutor
 
-    from darcyan.pipeline import match_shapes
+    from darcyan.method.pipeline import match_shapes
 
     start = time.perf_counter()
     with ProcessPoolExecutor(max_workers=2) as pool:
@@ -252,8 +254,8 @@ def child_parallel(task: dict) -> dict:
 
 def child_warm(task: dict) -> dict:
     """In-process: both shapes from a filled ShapeCache, then matched (imports excluded)."""
-    from darcyan.cache import ShapeCache
-    from darcyan.pipeline import describe_shape, match_shapes
+    from darcyan.io.cache import ShapeCache
+    from darcyan.method.pipeline import describe_shape, match_shapes
 
     cache = ShapeCache(task["cache"])
     start_wall, start_cpu = time.perf_counter(), time.process_time()
@@ -265,8 +267,8 @@ def child_warm(task: dict) -> dict:
 
 def child_describe(task: dict) -> dict:
     """One shape (a file or the synthetic figure) described stage by stage."""
-    from darcyan import synthetic
-    from darcyan.pipeline import analyze_mesh
+    from darcyan.geometry import synthetic
+    from darcyan.method.pipeline import analyze_mesh
 
     kind, _, value = task["source"].partition(":")
     mesh = synthetic.figure(0, int(value)) if kind == "figure" else _load(value)
@@ -285,7 +287,7 @@ def child_profile(task: dict) -> dict:
     import cProfile
     import pstats
 
-    from darcyan.pipeline import analyze_mesh, match_shapes
+    from darcyan.method.pipeline import analyze_mesh, match_shapes
 
     meshes = [_load(path) for path in task["files"]]
     profiler = cProfile.Profile(time.process_time)
@@ -505,8 +507,8 @@ def main(argv: list[str] | None = None) -> int:
         runs["first, filling the cache"] = run_process([sys.executable, "-m", "darcyan", "match", *files], _env(cache))
         warm = [run_process([sys.executable, "-m", "darcyan", "match", *files], _env(cache)) for _ in range(args.repeat)]
         runs["second, warm cache"] = min(warm, key=lambda r: r["wall"])
-        runs["import only (`python -c 'import darcyan.cli, darcyan.pipeline'`)"] = run_process(
-            [sys.executable, "-c", "import darcyan.cli, darcyan.pipeline"], _env())
+        runs["import only (`python -c 'import darcyan.cli, darcyan.method.pipeline'`)"] = run_process(
+            [sys.executable, "-c", "import darcyan.cli, darcyan.method.pipeline"], _env())
         in_process = run_child({"task": "warm", "files": files, "cache": cache})
         parallel = run_child({"task": "parallel", "files": files})
         for name, r in runs.items():

@@ -20,7 +20,7 @@ import sys
 from pathlib import Path
 
 from darcyan import DarcyanConfig
-from darcyan.bench import run_bench
+from darcyan.bench.runner import run_bench
 
 # Values tried for each parameter (the default is added to each list).
 GRID = {

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from darcyan import synthetic
+from darcyan.geometry import synthetic
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -54,8 +54,8 @@ def correct_matches(folder: Path, a: str, b: str, cache, config=None, threshold:
     from scipy.spatial import cKDTree
 
     from darcyan import DarcyanConfig, describe_shape, match_shapes
-    from darcyan.evaluation import read_vts
-    from darcyan.mesh import load_mesh
+    from darcyan.eval.metrics import read_vts
+    from darcyan.io.mesh_files import load_mesh
 
     config = DarcyanConfig() if config is None else config
     shape_1, shape_2 = (describe_shape(folder / f"{name}.off", config, cache=cache) for name in (a, b))

@@ -7,13 +7,15 @@ import json
 import numpy as np
 import pytest
 
-from darcyan import baselines, synthetic
-from darcyan.bench import (Progress, default_pairs, discover_dataset, read_pairs, run_bench, shape_class)
+from darcyan.bench.runner import Progress, default_pairs, discover_dataset, read_pairs, run_bench, shape_class
 from darcyan.cli import main
 from darcyan.errors import DarcyanError
-from darcyan.geodesics import GeodesicSolver
-from darcyan.matching import match_descriptors
-from darcyan.mesh import normalize_mesh, save_mesh
+from darcyan.eval import baselines
+from darcyan.geometry import spectral, synthetic
+from darcyan.geometry.geodesics import GeodesicSolver
+from darcyan.geometry.mesh import normalize_mesh
+from darcyan.io.mesh_files import save_mesh
+from darcyan.method.matching import match_descriptors
 
 REQUIRED_KEYS = ("pairs", "features", "matches", "correct", "rate", "rate_sym", "repeatability", "mean_error")
 METHODS = ("darcyan", "hks", "wks")
@@ -189,7 +191,7 @@ def test_laplace_beltrami_spectrum_of_a_sphere():
     # On a sphere of area 1, radius r = 1/sqrt(4 pi): eigenvalues l (l + 1) / r^2, multiplicity 2l + 1.
     mesh, _ = normalize_mesh(synthetic.icosphere(subdivisions=4))
     for laplacian in ("cotangent", "robust"):
-        spectrum = baselines.laplace_beltrami_spectrum(mesh, k=10, laplacian=laplacian)
+        spectrum = spectral.laplace_beltrami_spectrum(mesh, k=10, laplacian=laplacian)
         assert abs(spectrum.values[0]) < 1e-6
         np.testing.assert_allclose(spectrum.values[1:4], 2 * 4 * np.pi, rtol=0.01)
         np.testing.assert_allclose(spectrum.values[4:9], 6 * 4 * np.pi, rtol=0.01)
@@ -203,7 +205,7 @@ def test_hks_and_wks_match_the_figures_limb_tips(method):
     descriptors = []
     for pose in (0, 1):
         mesh, _ = normalize_mesh(synthetic.figure(pose, subdivisions=4))
-        spectrum = baselines.laplace_beltrami_spectrum(mesh, k=60)
+        spectrum = spectral.laplace_beltrami_spectrum(mesh, k=60)
         d = baselines.spectral_descriptors(method, spectrum, synthetic.figure_tips(subdivisions=4))
         assert d.shape == (len(tips), baselines.SIGNATURE_SAMPLES) and np.all(np.isfinite(d)) and np.all(d >= 0)
         descriptors.append(d)
@@ -259,9 +261,9 @@ def test_mirror_of_tosca_hires_agrees_with_tosca_5k_sym_vts(tosca):
     the mirror map derived on hires (identity data, no .sym.vts)."""
     from scipy.spatial import cKDTree
 
-    from darcyan.bench import class_mirror
-    from darcyan.evaluation import read_vts
-    from darcyan.mesh import load_mesh
+    from darcyan.bench.runner import class_mirror
+    from darcyan.eval.metrics import read_vts
+    from darcyan.io.mesh_files import load_mesh
 
     hires = discover_dataset(tosca / "tosca-hires")
     found = class_mirror(hires, "wolf")

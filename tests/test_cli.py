@@ -8,9 +8,9 @@ import sys
 import numpy as np
 import pytest
 
-from darcyan import synthetic
 from darcyan.cli import main
-from darcyan.mesh import save_mesh
+from darcyan.geometry import synthetic
+from darcyan.io.mesh_files import save_mesh
 
 
 @pytest.fixture(scope="module")

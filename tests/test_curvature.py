@@ -2,9 +2,11 @@
 
 import numpy as np
 
-from darcyan import synthetic
-from darcyan.curvature import mixed_voronoi_area, principal_curvatures
-from darcyan.mesh import Mesh, prepare_mesh
+from darcyan.geometry import synthetic
+from darcyan.geometry.curvature import principal_curvatures
+from darcyan.geometry.mesh import Mesh
+from darcyan.geometry.operators import mixed_voronoi_area
+from darcyan.geometry.repair import prepare_mesh
 
 
 def test_sphere_principal_curvatures_are_one_over_r(sphere):

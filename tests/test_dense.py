@@ -8,14 +8,25 @@ import warnings
 import numpy as np
 import pytest
 
-from darcyan import DarcyanConfig, synthetic
+from darcyan import DarcyanConfig
 from darcyan.cli import main
-from darcyan.dense import (MAX_EXHAUSTIVE_LANDMARKS, UNMAPPED, DenseConfig, consistent_landmarks, dense_map, dense_map_to_csv,
-                           evaluate_dense, nearest_rows, surface_sample)
+from darcyan.dense.maps import (
+    MAX_EXHAUSTIVE_LANDMARKS,
+    UNMAPPED,
+    DenseConfig,
+    consistent_landmarks,
+    dense_map,
+    dense_map_to_csv,
+    nearest_rows,
+    surface_sample,
+)
 from darcyan.errors import ConfigError, DarcyanError
-from darcyan.evaluation import GroundTruth
-from darcyan.mesh import Mesh, save_mesh
-from darcyan.pipeline import Correspondence, analyze_mesh, match_shapes
+from darcyan.eval.dense_scores import evaluate_dense
+from darcyan.eval.metrics import GroundTruth
+from darcyan.geometry import synthetic
+from darcyan.geometry.mesh import Mesh
+from darcyan.io.mesh_files import save_mesh
+from darcyan.method.pipeline import Correspondence, analyze_mesh, match_shapes
 
 # A lighter dense stage than the default, so the tests take seconds (same method).
 FAST = DenseConfig(zoomout_samples=1000, basis_size=40)
@@ -145,9 +156,9 @@ def test_errors_name_the_problem(figure_pair):
     tips = synthetic.figure_tips()
     with pytest.raises(DarcyanError, match="at least 3"):
         dense_map(shape_1, shape_2, tip_correspondence(tips[:2], tips[:2]), FAST)
-    stripped = dataclasses.replace(shape_1, name="cached.off", mesh=None, solver=None)  # as from the cache
-    with pytest.raises(DarcyanError, match="cached.off.*without a cache"):
-        dense_map(stripped, shape_2, tip_correspondence(tips, tips), FAST)
+    record = dataclasses.replace(shape_1.description, name="cached.off")  # as read from the cache
+    with pytest.raises(DarcyanError, match="cached.off.*prepared shapes"):
+        dense_map(record, shape_2, tip_correspondence(tips, tips), FAST)
     with pytest.raises(ConfigError, match="landmarks"):
         DenseConfig(landmarks="some")
     with pytest.raises(ConfigError, match="basis_start"):

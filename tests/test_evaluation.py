@@ -4,13 +4,22 @@ vts ground truth, derived mirror maps."""
 import numpy as np
 import pytest
 
-from darcyan import synthetic
 from darcyan.errors import MeshError
-from darcyan.evaluation import (CURVE_TAUS, cumulative_curve, geodesic_errors, input_to_mesh_index,
-                                mirror_agreement, nearest_samples, read_vts, reflection_symmetry, score_pair,
-                                summarize)
-from darcyan.geodesics import GeodesicSolver
-from darcyan.mesh import Mesh, normalize_mesh
+from darcyan.eval.metrics import (
+    CURVE_TAUS,
+    cumulative_curve,
+    geodesic_errors,
+    input_to_mesh_index,
+    mirror_agreement,
+    nearest_samples,
+    read_vts,
+    reflection_symmetry,
+    score_pair,
+    summarize,
+)
+from darcyan.geometry import synthetic
+from darcyan.geometry.geodesics import GeodesicSolver
+from darcyan.geometry.mesh import Mesh, normalize_mesh
 
 FMM_TOLERANCE = 0.03  # relative error of fast marching on a 10k-vertex sphere
 
@@ -141,7 +150,7 @@ def test_reflection_symmetry_finds_the_plane_of_a_symmetric_shape_and_not_of_the
     assert (found.vertices[found.vertices] == np.arange(ellipsoid.n_vertices)).mean() > 0.99  # an involution
     assert (found.vertices != np.arange(ellipsoid.n_vertices)).mean() > 0.9
     # The built-in figure is deliberately asymmetric.
-    from darcyan.bench import MIRROR_MAX_RESIDUAL
+    from darcyan.bench.runner import MIRROR_MAX_RESIDUAL
 
     assert reflection_symmetry(synthetic.figure(0)).residual > 3 * MIRROR_MAX_RESIDUAL
 

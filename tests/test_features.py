@@ -3,11 +3,19 @@
 import numpy as np
 import pytest
 
-from darcyan import DarcyanConfig, synthetic
+from darcyan import DarcyanConfig
 from darcyan.errors import ConfigError
-from darcyan.features import FeaturePoints, average_geodesic_distance, extremities, heat_kernel_diagonal, sharpest_tips
-from darcyan.geodesics import GeodesicSolver
-from darcyan.mesh import normalize_mesh, prepare_mesh
+from darcyan.geometry import synthetic
+from darcyan.geometry.geodesics import GeodesicSolver
+from darcyan.geometry.mesh import normalize_mesh
+from darcyan.geometry.repair import prepare_mesh
+from darcyan.method.features import (
+    FeaturePoints,
+    average_geodesic_distance,
+    extremities,
+    heat_kernel_diagonal,
+    sharpest_tips,
+)
 
 
 @pytest.mark.parametrize("pose", [0, 1, 2])
@@ -48,7 +56,7 @@ def test_short_front_legs_of_the_hires_cat_are_extremities(tosca):
     dropped that paw. The front paws, by the data: the lowest vertex of each side in the front
     40% of the standing pose cat0 (same vertex numbering in every pose)."""
     from darcyan import load_mesh
-    from darcyan.pipeline import analyze_mesh
+    from darcyan.method.pipeline import analyze_mesh
 
     standing = load_mesh(tosca / "tosca-hires" / "cat0.off").vertices
     front = standing[:, 1] < np.percentile(standing[:, 1], 40)
@@ -122,7 +130,7 @@ def test_cat_head_point_repeats_across_poses_on_its_nose(tosca, tmp_path):
     """tosca-5k cat: the diffused AGD's head maximum lies on an ear in some poses (1, 2, 4, 5)
     and on the nose in others (0, 3, 7, 8): the body stretches from pose to pose, and so does
     the AGD of its tips. Moved to the sharpest tip of the head, the feature points repeat."""
-    from darcyan.bench import run_bench
+    from darcyan.bench.runner import run_bench
 
     pairs = tmp_path / "pairs.txt"
     pairs.write_text("cat1\tcat0\ncat2\tcat3\ncat4\tcat7\ncat5\tcat8\ncat0\tcat2\n")

@@ -1,7 +1,7 @@
 """Property-based fuzzing of the mesh readers (hypothesis).
 
 Whatever the bytes in a file with a mesh extension, :func:`darcyan.load_mesh` either returns a
-valid :class:`~darcyan.mesh.Mesh` (finite coordinates, triangle indices in range) or raises
+valid :class:`~darcyan.geometry.mesh.Mesh` (finite coordinates, triangle indices in range) or raises
 darcyan's own :class:`~darcyan.errors.MeshError` naming the file. Any other exception, a hang or
 a mesh with NaN coordinates or dangling indices is a bug. Inputs are raw bytes, valid files with
 random byte edits (the interesting region: nearly valid files), and valid files with token edits.
@@ -20,7 +20,8 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 from darcyan.errors import MeshError  # noqa: E402
-from darcyan.mesh import Mesh, load_mesh  # noqa: E402
+from darcyan.geometry.mesh import Mesh
+from darcyan.io.mesh_files import load_mesh  # noqa: E402
 
 # An octahedron with one quad split: small enough to mutate densely, big enough to pass check_mesh.
 VERTICES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1.5]])

@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from darcyan import synthetic
-from darcyan.geodesics import GeodesicSolver
-from darcyan.mesh import prepare_mesh
+from darcyan.geometry import synthetic
+from darcyan.geometry.geodesics import GeodesicSolver
+from darcyan.geometry.repair import prepare_mesh
 
 # Documented tolerances: first-order fast marching errs by up to about one edge length plus a
 # small fraction of the distance (wavefronts crossing triangles at an angle).
@@ -63,15 +63,15 @@ def test_locate_recovers_surface_points(sphere):
 
 
 def _figure_with_proxy():
-    from darcyan.mesh import normalize_mesh
-    from darcyan.proxy import coarse_proxy
+    from darcyan.geometry.mesh import normalize_mesh
+    from darcyan.geometry.proxy import coarse_proxy
 
     mesh, _ = normalize_mesh(prepare_mesh(synthetic.figure(1))[0])  # area 1
     return mesh, GeodesicSolver(mesh), coarse_proxy(mesh, 2500)
 
 
 def test_ball_fields_equal_whole_mesh_fast_marching_within_the_radius():
-    from darcyan.geodesics import LocalGeodesicSolver
+    from darcyan.geometry.geodesics import LocalGeodesicSolver
 
     mesh, solver, proxy = _figure_with_proxy()
     radius = 0.25
@@ -89,7 +89,7 @@ def test_ball_fields_equal_whole_mesh_fast_marching_within_the_radius():
 
 
 def test_a_ball_cut_too_tight_by_a_bad_estimate_grows_until_exact():
-    from darcyan.geodesics import LocalGeodesicSolver
+    from darcyan.geometry.geodesics import LocalGeodesicSolver
 
     mesh, solver, proxy = _figure_with_proxy()
     radius = 0.2
@@ -101,7 +101,7 @@ def test_a_ball_cut_too_tight_by_a_bad_estimate_grows_until_exact():
 
 
 def test_without_an_estimate_fields_and_balls_are_the_whole_mesh(sphere):
-    from darcyan.geodesics import LocalGeodesicSolver
+    from darcyan.geometry.geodesics import LocalGeodesicSolver
 
     mesh, _ = prepare_mesh(sphere)
     solver = GeodesicSolver(mesh)

@@ -2,13 +2,14 @@
 
 import numpy as np
 import pytest
-
-from darcyan import DarcyanConfig, synthetic
-from darcyan.geodesics import GeodesicSolver
-from darcyan.grid import darcyan_grid
-from darcyan.mesh import Mesh, prepare_mesh
-
 from conftest import random_rotation
+
+from darcyan import DarcyanConfig
+from darcyan.geometry import synthetic
+from darcyan.geometry.geodesics import GeodesicSolver
+from darcyan.geometry.mesh import Mesh
+from darcyan.geometry.repair import prepare_mesh
+from darcyan.method.grid import darcyan_grid
 
 
 def test_flat_disc_points_on_circles_at_equal_angles():
@@ -77,10 +78,10 @@ def test_descriptor_invariant_to_rigid_motion_and_renumbering(figure_descriptor)
 
 
 def test_grid_built_on_a_ball_equals_the_grid_on_the_whole_mesh():
-    from darcyan.geodesics import LocalGeodesicSolver
-    from darcyan.grid import darcyan_grids, grid_reach
-    from darcyan.mesh import normalize_mesh
-    from darcyan.proxy import coarse_proxy
+    from darcyan.geometry.geodesics import LocalGeodesicSolver
+    from darcyan.geometry.mesh import normalize_mesh
+    from darcyan.geometry.proxy import coarse_proxy
+    from darcyan.method.grid import darcyan_grids, grid_reach
 
     mesh, _ = normalize_mesh(prepare_mesh(synthetic.figure(1))[0])
     solver = GeodesicSolver(mesh)

@@ -2,13 +2,12 @@
 
 import numpy as np
 import pytest
+from conftest import correct_matches, random_rotation
 
 from darcyan import DarcyanConfig, analyze_mesh, match_shapes
 from darcyan.demo import run_demo
-from darcyan.matching import Matches, descriptor_distances, drop_dissimilar, match_descriptors
-from darcyan.mesh import Mesh
-
-from conftest import correct_matches, random_rotation
+from darcyan.geometry.mesh import Mesh
+from darcyan.method.matching import Matches, descriptor_distances, drop_dissimilar, match_descriptors
 
 
 def test_nearest_and_one_to_one_on_a_small_table():
@@ -53,7 +52,7 @@ def test_a_cat_head_point_without_counterpart_is_left_unmatched(tosca, tmp_path)
     put cat2's head point on one ear, the target's on the nose: no counterpart. The layout still
     paired it with one, whose descriptor is farther than 1.5 median distances, and `darcyan
     bench` counted 5 of 6 correct. Left out, the other five stay and are all correct."""
-    from darcyan.cache import ShapeCache
+    from darcyan.io.cache import ShapeCache
 
     cache = ShapeCache(tmp_path / "cache")
     for a, b in (("cat2", "cat9"), ("cat2", "cat7")):
@@ -66,7 +65,7 @@ def test_a_cat_head_point_without_counterpart_is_left_unmatched(tosca, tmp_path)
 def test_cat_head_point_on_the_nose_in_every_pose_matches(tosca, tmp_path):
     """The same pairs with the default feature points: cat2's head point moves from its ear to
     the nose (the sharpest tip of the head), where the targets' lie, and all six match."""
-    from darcyan.cache import ShapeCache
+    from darcyan.io.cache import ShapeCache
 
     cache = ShapeCache(tmp_path / "cache")
     for a, b in (("cat2", "cat9"), ("cat2", "cat7")):

@@ -4,11 +4,14 @@ import warnings
 
 import numpy as np
 import pytest
-
 from conftest import noisy_copy
-from darcyan import MeshError, MeshWarning, synthetic
-from darcyan.mesh import (DENOISE_BLOCK, Mesh, denoise_mesh, load_mesh, normalize_mesh, prepare_mesh, save_mesh,
-                          surface_roughness, taubin_smooth)
+
+from darcyan import MeshError, MeshWarning
+from darcyan.geometry import synthetic
+from darcyan.geometry.denoise import DENOISE_BLOCK, denoise_mesh, surface_roughness, taubin_smooth
+from darcyan.geometry.mesh import Mesh, normalize_mesh
+from darcyan.geometry.repair import prepare_mesh
+from darcyan.io.mesh_files import load_mesh, save_mesh
 
 TETRA_V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
 TETRA_F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])

@@ -3,11 +3,12 @@
 import numpy as np
 import pytest
 
-from darcyan import DarcyanConfig, analyze_mesh, synthetic
-from darcyan.bench import run_bench
-from darcyan.features import average_geodesic_distance
-from darcyan.mesh import prepare_mesh
-from darcyan.proxy import coarse_proxy
+from darcyan import DarcyanConfig, analyze_mesh
+from darcyan.bench.runner import run_bench
+from darcyan.geometry import synthetic
+from darcyan.geometry.proxy import coarse_proxy
+from darcyan.geometry.repair import prepare_mesh
+from darcyan.method.features import average_geodesic_distance
 
 
 def test_proxy_agd_matches_the_exact_average_on_a_sphere(sphere):

@@ -23,14 +23,15 @@ import struct
 import numpy as np
 import pytest
 
-from darcyan import synthetic
 from darcyan.cli import main
 from darcyan.config import DarcyanConfig
-from darcyan.descriptors import curvature_descriptors
-from darcyan.geodesics import GeodesicSolver
-from darcyan.grid import darcyan_grid
-from darcyan.mesh import Mesh, boundary_vertices, load_mesh, save_mesh
-from darcyan.pipeline import analyze_mesh, match_shapes
+from darcyan.geometry import synthetic
+from darcyan.geometry.geodesics import GeodesicSolver
+from darcyan.geometry.mesh import Mesh, boundary_vertices
+from darcyan.io.mesh_files import load_mesh, save_mesh
+from darcyan.method.descriptors import curvature_descriptors
+from darcyan.method.grid import darcyan_grid
+from darcyan.method.pipeline import analyze_mesh, match_shapes
 
 # A small closed mesh (octahedron, flattened at the bottom so no face is degenerate).
 V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1.5]])
@@ -530,9 +531,10 @@ def test_noisy_figure_is_denoised_and_still_matched():
     import warnings
 
     from conftest import noisy_copy
+
     from darcyan import MeshWarning
-    from darcyan.evaluation import geodesic_errors
-    from darcyan.pipeline import analyze_mesh, match_shapes
+    from darcyan.eval.metrics import geodesic_errors
+    from darcyan.method.pipeline import analyze_mesh, match_shapes
 
     clean = [synthetic.figure(0), synthetic.figure(1)]
     noisy = [noisy_copy(mesh, 0.01, seed) for seed, mesh in enumerate(clean)]

@@ -1,13 +1,12 @@
-"""Telling a correspondence from its mirror image (darcyan.symmetry)."""
+"""Telling a correspondence from its mirror image (darcyan.method.symmetry)."""
 
 import numpy as np
 import pytest
+from conftest import correct_matches, random_rotation
 
 from darcyan import DarcyanConfig, analyze_mesh, match_shapes
-from darcyan.mesh import Mesh
-from darcyan.symmetry import handedness, orientation_agreement
-
-from conftest import correct_matches, random_rotation
+from darcyan.geometry.mesh import Mesh
+from darcyan.method.symmetry import handedness, orientation_agreement
 
 
 def _same_vertex(shape_1, shape_2):
@@ -59,7 +58,7 @@ def test_a_hand_in_another_pose_reads_as_the_same_hand_and_in_a_mirror_as_the_ot
     """tosca-hires michael0 against michael1 (vertex i is the same body point in both) and
     against michael1 reflected: the feature points on hands and feet that are chiral enough to
     count turn the same way as their true counterparts, and the other way in the mirror."""
-    from darcyan.mesh import load_mesh
+    from darcyan.io.mesh_files import load_mesh
 
     shapes = [analyze_mesh(load_mesh(tosca / "tosca-hires" / f"michael{pose}.off")) for pose in (0, 1)]
     other = load_mesh(tosca / "tosca-hires" / "michael1.off")
@@ -88,7 +87,7 @@ HUMAN_PAIRS = (("michael0", "michael2"), ("michael18", "michael3"), ("michael12"
 
 @pytest.mark.data
 def test_humans_keep_left_and_right(tosca, tmp_path):
-    from darcyan.cache import ShapeCache
+    from darcyan.io.cache import ShapeCache
 
     cache = ShapeCache(tmp_path / "cache")
     counts = np.array([correct_matches(tosca / "tosca-5k", a, b, cache) for a, b in HUMAN_PAIRS])
@@ -100,8 +99,8 @@ def test_humans_keep_left_and_right(tosca, tmp_path):
 def test_handedness_undoes_hand_and_foot_swaps_the_mirror_test_missed(tosca, tmp_path, monkeypatch):
     """tosca-5k pairs whose hands or feet go to the other side without handedness (3 of 5 right);
     handedness sets them right. (Of the 422 michael and david pairs of tosca-5k, 4 change so.)"""
-    from darcyan import symmetry
-    from darcyan.cache import ShapeCache
+    from darcyan.io.cache import ShapeCache
+    from darcyan.method import symmetry
 
     cache = ShapeCache(tmp_path / "cache")
     pairs = {("michael11", "michael19"): 3, ("michael19", "michael17"): 3}
@@ -116,7 +115,7 @@ def test_true_matching_ranked_below_the_eighth_candidate_is_still_found(tosca, t
     """In these tosca-5k dog pairs the layout score ranks the true matching of all six feature
     points below the eighth candidate (a non-repeatable point's place moves it down); the mirror
     test weighs the best 16, and finds it (with 8, `darcyan bench` counted 3 of 6 correct in each)."""
-    from darcyan.cache import ShapeCache
+    from darcyan.io.cache import ShapeCache
 
     cache = ShapeCache(tmp_path / "cache")
     every_match = DarcyanConfig(max_match_distance=0.0)  # the matching the mirror test chose, whole
@@ -125,8 +124,8 @@ def test_true_matching_ranked_below_the_eighth_candidate_is_still_found(tosca, t
 
 
 def test_test_points_are_drawn_uniformly_over_the_area_not_the_vertices():
-    from darcyan.curvature import mixed_voronoi_area
-    from darcyan.symmetry import OrientedSurface, surface_samples
+    from darcyan.geometry.operators import mixed_voronoi_area
+    from darcyan.method.symmetry import OrientedSurface, surface_samples
 
     # A unit square whose vertex columns crowd toward x = 0 (x = t^2): 71% of the vertices lie
     # left of x = 0.5, half of the area does.
@@ -149,7 +148,7 @@ def test_test_points_are_drawn_uniformly_over_the_area_not_the_vertices():
 def test_nearest_points_equals_a_kd_tree(dim):
     from scipy.spatial import cKDTree
 
-    from darcyan.symmetry import nearest_points
+    from darcyan.method.symmetry import nearest_points
 
     rng = np.random.default_rng(dim)
     # Far from the origin (large |p|^2 against small gaps: the screening's worst case), float32
@@ -164,7 +163,7 @@ def test_nearest_points_equals_a_kd_tree(dim):
 
 
 def test_nearest_points_breaks_ties_by_the_smallest_index():
-    from darcyan.symmetry import nearest_points
+    from darcyan.method.symmetry import nearest_points
 
     points = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 5.0], [0.0, 0.0]])
     queries = np.array([[1.0, 0.0], [0.1, 0.0], [0.0, 0.0]])  # 0 and 1 tie; 0 and 3 coincide
@@ -174,7 +173,7 @@ def test_nearest_points_breaks_ties_by_the_smallest_index():
 def test_nearest_neighbours_equal_a_kd_tree():
     from scipy.spatial import cKDTree
 
-    from darcyan.symmetry import nearest_neighbours
+    from darcyan.method.symmetry import nearest_neighbours
 
     points = np.random.default_rng(1).random((500, 3))
     expected = cKDTree(points).query(points, k=7)[1][:, 1:]
@@ -187,8 +186,8 @@ def test_a_cached_match_imports_no_scipy(tmp_path):
     import subprocess
     import sys
 
-    from darcyan.mesh import save_mesh
-    from darcyan.synthetic import figure
+    from darcyan.geometry.synthetic import figure
+    from darcyan.io.mesh_files import save_mesh
 
     paths = []
     for pose in (0, 1):

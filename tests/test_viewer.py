@@ -18,8 +18,11 @@ import numpy as np
 import pytest
 
 pytest.importorskip("plotly", reason="plotly not installed (pip install 'darcyan[html]')")
-from darcyan import DarcyanConfig, synthetic, viewer, viz  # noqa: E402
-from darcyan.evaluation import GroundTruth  # noqa: E402
+from darcyan import DarcyanConfig
+from darcyan.eval.metrics import GroundTruth  # noqa: E402
+from darcyan.geometry import synthetic
+from darcyan.viz import html as viewer  # noqa: E402
+from darcyan.viz import scenes as viz
 
 CHROMIUM = os.environ.get("DARCYAN_CHROMIUM") or shutil.which("chromium") or shutil.which("chromium-browser")
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

@@ -10,9 +10,11 @@ pytest.importorskip("matplotlib")
 from matplotlib.image import imread  # noqa: E402
 from scipy import ndimage  # noqa: E402
 
-from darcyan import DarcyanConfig, save_mesh, synthetic, viz  # noqa: E402
+from darcyan import DarcyanConfig, save_mesh
 from darcyan.cli import main  # noqa: E402
-from darcyan.evaluation import GroundTruth  # noqa: E402
+from darcyan.eval.metrics import GroundTruth  # noqa: E402
+from darcyan.geometry import synthetic
+from darcyan.viz import scenes as viz  # noqa: E402
 
 SUBDIVISIONS = 4  # 2,562-vertex figure: fast, still smooth enough to carry a grid
 COLOUR_TOLERANCE = 0.02  # PNG channels are 8-bit: an exact colour is within 1/255

@@ -11,26 +11,37 @@ L2 nearest-neighbour matching.
     >>> matches = darcyan.match_shapes(shape_1, shape_2)      # doctest: +SKIP
 """
 
-from .cache import ShapeCache
+from ._version import __version__  # noqa: E402
 from .config import DarcyanConfig
-from .curvature import Curvatures, principal_curvatures
-from .descriptors import curvature_descriptor, curvature_descriptors
 from .errors import ConfigError, DarcyanError, DependencyError, MeshError
-from .features import AGD, FeaturePoints, average_geodesic_distance, extremities
-from .geodesics import GeodesicSolver
-from .grid import DarcyanGrid, darcyan_grid, darcyan_grids
-from .matching import Matches, descriptor_distances, match_descriptors
-from .mesh import Mesh, MeshWarning, load_mesh, normalize_mesh, prepare_mesh, save_mesh
-from .pipeline import (Correspondence, ShapeDescription, analyze_mesh, describe_shape, match_files,
-                       match_shapes)
-
-__version__ = "0.1.0"
+from .geometry.curvature import Curvatures, principal_curvatures
+from .geometry.geodesics import GeodesicSolver
+from .geometry.mesh import Mesh, MeshWarning, normalize_mesh
+from .geometry.repair import prepare_mesh
+from .geometry.shape import Shape, prepare_shape
+from .io.cache import ShapeCache
+from .io.mesh_files import load_mesh, save_mesh
+from .method.descriptors import curvature_descriptor, curvature_descriptors
+from .method.features import AGD, FeaturePoints, average_geodesic_distance, extremities
+from .method.grid import DarcyanGrid, darcyan_grid, darcyan_grids
+from .method.matching import Matches, descriptor_distances, match_descriptors
+from .method.pipeline import (
+                              Correspondence,
+                              ShapeAnalysis,
+                              ShapeDescription,
+                              analyze_mesh,
+                              analyze_shape,
+                              describe_shape,
+                              load_shape,
+                              match_files,
+                              match_shapes,
+)
 
 __all__ = [
     "AGD", "ConfigError", "Correspondence", "Curvatures", "DarcyanConfig", "DarcyanError", "DarcyanGrid",
     "DependencyError", "FeaturePoints", "GeodesicSolver", "Matches", "Mesh", "MeshError", "MeshWarning",
-    "ShapeCache", "ShapeDescription", "analyze_mesh", "average_geodesic_distance", "curvature_descriptor",
+    "Shape", "ShapeAnalysis", "ShapeCache", "ShapeDescription", "analyze_mesh", "analyze_shape", "average_geodesic_distance", "curvature_descriptor",
     "curvature_descriptors", "darcyan_grid", "darcyan_grids", "describe_shape", "descriptor_distances",
-    "extremities", "load_mesh", "match_descriptors", "match_files", "match_shapes", "normalize_mesh",
-    "prepare_mesh", "principal_curvatures", "save_mesh",
+    "extremities", "load_mesh", "load_shape", "match_descriptors", "match_files", "match_shapes", "normalize_mesh",
+    "prepare_mesh", "prepare_shape", "principal_curvatures", "save_mesh",
 ]

@@ -13,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
-from .cache import ShapeCache
+from ._version import __version__
 from .config import MATCHING_MODES, DarcyanConfig
 from .errors import DarcyanError
-from .mesh import MeshWarning
+from .geometry.mesh import MeshWarning
+from .io.cache import ShapeCache
 
 EXIT_USAGE = 2
 
@@ -87,7 +87,7 @@ def _note_changes(shape) -> None:
 
 
 def cmd_match(args: argparse.Namespace) -> int:
-    from .pipeline import describe_shape, describe_shapes, match_shapes
+    from .method.pipeline import describe_shapes, load_shape, match_shapes
 
     config = _config(args)
     if args.jobs < 1:
@@ -97,21 +97,21 @@ def cmd_match(args: argparse.Namespace) -> int:
     if args.truth:
         if not (args.plot or args.html):
             raise DarcyanError("--truth marks wrong matches in the pictures: give --plot and/or --html too")
-        from .viz import read_truth
+        from .viz.scenes import read_truth
 
         truth = read_truth(args.truth)
     _picture_dependencies(args)
-    if args.dense:  # a dense map needs the meshes and solvers, which stay in this process
-        shape_1, shape_2 = (describe_shape(path, config, args.repair) for path in (args.source, args.target))
-    else:
-        shape_1, shape_2 = describe_shapes([args.source, args.target], config, args.repair, cache, args.jobs)
-    _note_changes(shape_1)
-    _note_changes(shape_2)
-    correspondence = match_shapes(shape_1, shape_2, config)
+    description_1, description_2 = describe_shapes([args.source, args.target], config, args.repair, cache, args.jobs)
+    _note_changes(description_1)
+    _note_changes(description_2)
+    correspondence = match_shapes(description_1, description_2, config)
+    shapes = None
+    if args.dense or args.plot or args.html:  # the prepared shapes, once for the dense map and the pictures
+        shapes = [load_shape(path, config, args.repair, warn=False) for path in (args.source, args.target)]
     if args.dense:
-        from .dense import UNMAPPED, dense_map, dense_map_to_csv
+        from .dense.maps import UNMAPPED, dense_map, dense_map_to_csv
 
-        result = dense_map(shape_1, shape_2, correspondence)
+        result = dense_map(shapes[0], shapes[1], correspondence)
         left_out = int((result.target == UNMAPPED).sum())
         if left_out:
             print(f"darcyan: warning: {args.source}: {left_out} vertices outside the matched component "
@@ -120,9 +120,9 @@ def cmd_match(args: argparse.Namespace) -> int:
     else:
         _write_text(correspondence.to_csv(), args.output)
     if args.plot or args.html:
-        from .viz import match_scene
+        from .viz.scenes import match_scene
 
-        scene = match_scene(args.source, args.target, correspondence, truth, config, args.repair)
+        scene = match_scene(shapes[0], shapes[1], correspondence, truth, config, args.repair)
         _pictures(scene, args.plot, args.html, "render_matches", "matches_html")
     return 0
 
@@ -142,7 +142,8 @@ def _picture_dependencies(args: argparse.Namespace) -> None:
 
 def _pictures(scene, png: str | None, html: str | None, render: str, page: str) -> None:
     """Write the PNG and/or HTML picture of ``scene``; one line per file on stderr."""
-    from . import viewer, viz
+    from .viz import html as viewer
+    from .viz import scenes as viz
 
     if png:
         picture = getattr(viz, render)(scene, png)
@@ -152,7 +153,7 @@ def _pictures(scene, png: str | None, html: str | None, render: str, page: str) 
 
 
 def cmd_show_grid(args: argparse.Namespace) -> int:
-    from .viz import grid_scene
+    from .viz.scenes import grid_scene
 
     if not args.output and not args.html:
         raise DarcyanError("show-grid: give -o FILE.png and/or --html FILE.html")
@@ -164,7 +165,7 @@ def cmd_show_grid(args: argparse.Namespace) -> int:
 
 
 def cmd_features(args: argparse.Namespace) -> int:
-    from .pipeline import describe_shape
+    from .method.pipeline import describe_shape
 
     shape = describe_shape(args.mesh, _config(args), args.repair, _cache(args))
     _note_changes(shape)
@@ -174,7 +175,7 @@ def cmd_features(args: argparse.Namespace) -> int:
 
 
 def cmd_describe(args: argparse.Namespace) -> int:
-    from .pipeline import describe_shape
+    from .method.pipeline import describe_shape
 
     config = _config(args)
     shape = describe_shape(args.mesh, config, args.repair, _cache(args))
@@ -206,7 +207,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from .bench import report_markdown, run_bench
+    from .bench.runner import report_markdown, run_bench
 
     result = run_bench(args.dataset, args.out, methods=args.method, pairs_file=args.pairs, threshold=args.threshold,
                        config=_config(args), jobs=args.jobs, scheduler=args.scheduler, resume=args.resume,
@@ -282,9 +283,9 @@ def build_parser() -> argparse.ArgumentParser:
                                    "ground truth and prints the matches and how many are correct.")
     p.set_defaults(func=cmd_demo)
 
-    from .bench import METHODS
-    from .dense import DENSE_SAMPLE, DENSE_SEED
-    from .evaluation import DEFAULT_THRESHOLD
+    from .bench.runner import METHODS
+    from .eval.dense_scores import DENSE_SAMPLE, DENSE_SEED
+    from .eval.metrics import DEFAULT_THRESHOLD
 
     p = sub.add_parser("bench", help="correspondence rates on a dataset folder, darcyan and baselines side by side",
                        description="Match every ordered pair within each class of DATASET_DIR ({class}{pose}.off|ply|obj; "

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 from .errors import ConfigError
 
 MATCHING_MODES = ("consistent", "nearest", "one-to-one")
+# The fields that change how a mesh is prepared (checks, repair, denoising, normalization).
+PREPARE_FIELDS = ("denoise_area_ratio",)
 
 
 @dataclass(frozen=True)
@@ -33,7 +35,7 @@ class DarcyanConfig:
         denoise_area_ratio: a mesh whose area exceeds this multiple of its area after a few
             Taubin smoothing steps, and whose roughness is that of vertex noise, is crumpled at
             the scale of its edges; it is analysed after Taubin smoothing (with a warning), vertex
-            numbering kept (see :func:`darcyan.mesh.denoise_mesh`). Clean TOSCA meshes stay below
+            numbering kept (see :func:`darcyan.geometry.denoise.denoise_mesh`). Clean TOSCA meshes stay below
             1.04, vertex noise of half an edge gives 1.4 to 2.5. 0 disables the test.
         curvature_smoothing: iterations of area-weighted one-ring averaging applied to the Meyer
             principal curvatures before they are sampled (0 = raw Meyer operators).
@@ -50,7 +52,7 @@ class DarcyanConfig:
             geodesic radius (greedy non-maximum suppression over one-ring maxima).
         tip_gain: each feature point moves, within its extremity's top, to the vertex where the
             heat kernel at the time of ``agd_smoothing`` is largest, if it is at least this many
-            times the point's own (see :func:`darcyan.features.sharpest_tips`): the cat's nose
+            times the point's own (see :func:`darcyan.method.features.sharpest_tips`): the cat's nose
             instead of whichever of nose and ears a stretched body makes highest; 0 disables it
             (as does ``agd_smoothing`` 0).
         tip_radius: the extremity's top lies within this geodesic distance of the feature point.
@@ -134,6 +136,11 @@ class DarcyanConfig:
         values = self.as_dict()
         chosen = {k: values[k] for k in (fields or values)}
         return hashlib.sha1(json.dumps(chosen, sort_keys=True).encode()).hexdigest()[:16]
+
+    def prepare_fingerprint(self) -> str:
+        """:meth:`fingerprint` of the fields that change how a mesh is prepared
+        (:func:`darcyan.geometry.shape.prepare_shape`)."""
+        return self.fingerprint(*PREPARE_FIELDS)
 
     @classmethod
     def paper(cls, **changes) -> "DarcyanConfig":

@@ -6,10 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import synthetic
 from .config import DarcyanConfig
-from .evaluation import DEFAULT_THRESHOLD, geodesic_errors
-from .pipeline import Correspondence, analyze_mesh, match_shapes
+from .eval.metrics import DEFAULT_THRESHOLD, geodesic_errors
+from .geometry import synthetic
+from .method.pipeline import Correspondence, analyze_mesh, match_shapes
 
 
 @dataclass(frozen=True)

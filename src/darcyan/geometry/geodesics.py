@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from .errors import MeshError
+from ..errors import MeshError
 from .mesh import Mesh
 
 
@@ -176,7 +176,7 @@ class LocalGeodesicSolver:
         radius: geodesic radius (mesh units) around a source within which its distance field is
             exact (equal to ``solver.distance``) and within which :meth:`ball` can trace.
         estimate: ``vertex -> (n,)`` approximate distance field (a coarse proxy's, see
-            :class:`darcyan.proxy.CoarseProxy`), used to cut the balls and as the field beyond
+            :class:`darcyan.geometry.proxy.CoarseProxy`), used to cut the balls and as the field beyond
             ``radius``; ``None``: no cutting, every field and ball is the whole mesh's.
     """
 
@@ -254,7 +254,7 @@ def _manifold_piece(mesh: Mesh, inside: np.ndarray) -> tuple[Mesh, np.ndarray, n
     around a vertex where they meet only at a corner added (the solvers refuse such bow ties).
     Returns the piece, ``(k,)`` the whole mesh's index of each of its vertices, and the final mask;
     ``None`` when the piece would be the whole mesh."""
-    from .mesh import nonmanifold_vertices
+    from .repair import nonmanifold_vertices
 
     while not inside.all():
         faces = mesh.faces[inside]

@@ -19,7 +19,7 @@ Memory stays O(V): the functional maps are k x k, nearest neighbours are searche
 tree (few dimensions) or by chunks of source rows (spectral dimensions).
 
 :func:`evaluate_dense` scores a dense map against ground truth on a fixed random sample of
-source vertices with the standard geodesic error (see :mod:`darcyan.evaluation`);
+source vertices with the standard geodesic error (see :mod:`darcyan.eval.metrics`);
 :func:`pyfm_own_map` is pyFM's own pipeline without darcyan's landmarks, the baseline of
 ``darcyan bench --dense``.
 """
@@ -31,11 +31,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .curvature import cotangent_laplacian, mixed_voronoi_area
-from .errors import ConfigError, DarcyanError, require
-from .evaluation import DEFAULT_THRESHOLD, GroundTruth, cumulative_curve
-from .geodesics import GeodesicSolver
-from .mesh import Mesh
+from ..errors import ConfigError, DarcyanError, require
+from ..geometry.mesh import Mesh
+from ..geometry.spectral import laplace_beltrami_spectrum
 
 LANDMARK_MODES = ("consistent", "all")
 METHODS = ("zoomout", "pyfm")
@@ -50,8 +48,6 @@ KDTREE_MAX_DIM = 16
 NN_CHUNK_BYTES = 128 * 2**20
 # Shift of the shift-invert eigen solver (just below the zero eigenvalue of the Laplacian).
 EIGSH_SHIFT = -1e-8
-DENSE_SAMPLE = 1000  # source vertices scored by evaluate_dense
-DENSE_SEED = 0  # its numpy.random.default_rng seed
 MIN_LANDMARKS = 3
 # Consistent landmark sets: exact maximum-clique search up to this many matches, greedy above.
 MAX_EXHAUSTIVE_LANDMARKS = 24
@@ -198,24 +194,9 @@ def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float
 # Spectral basis and nearest neighbours
 
 
-def laplace_beltrami_basis(mesh: Mesh, size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The first ``size`` eigenpairs of the cotangent Laplace-Beltrami operator.
-
-    Returns ``eigenvalues (size,)``, ``eigenvectors (n, size)`` orthonormal for the mass, and the
-    lumped mass ``(n,)`` (Meyer's mixed Voronoi areas).
-    """
-    import scipy.sparse as sp  # scipy lazily, in every module: a cached match imports none of it
-    import scipy.sparse.linalg as sla
-
-    size = min(size, mesh.n_vertices - 1)
-    stiffness = (-cotangent_laplacian(mesh)).tocsc()
-    mass = mixed_voronoi_area(mesh)
-    try:
-        values, vectors = sla.eigsh(stiffness, k=size, M=sp.diags(mass).tocsc(), sigma=EIGSH_SHIFT, which="LM")
-    except (RuntimeError, sla.ArpackError) as exc:
-        raise DarcyanError(f"{mesh.name}: Laplace-Beltrami eigenproblem failed ({exc})") from None
-    order = np.argsort(values)
-    return values[order], vectors[:, order], mass
+def _basis(shape, size: int) -> np.ndarray:
+    """``(n, size)`` the shape's Laplace-Beltrami eigenvectors (built once per shape)."""
+    return shape.spectrum(min(size, shape.mesh.n_vertices - 1), shift=EIGSH_SHIFT).vectors
 
 
 def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
@@ -256,8 +237,8 @@ def surface_sample(mesh: Mesh, count: int, seed: int = 0) -> np.ndarray:
 
 def _landmark_pairs(shape_1, shape_2, correspondence, config: DenseConfig):
     """Landmark pairs in local numbering and their distance fields ``(n, k)`` on both shapes."""
-    src = _to_local(shape_1.mesh, correspondence.source_vertex)
-    tgt = _to_local(shape_2.mesh, correspondence.target_vertex)
+    src = shape_1.mesh_index(correspondence.source_vertex)
+    tgt = shape_2.mesh_index(correspondence.target_vertex)
     cost = np.asarray(getattr(correspondence, "distance", np.zeros(len(src))), dtype=np.float64)
     ok = (src >= 0) & (tgt >= 0)
     src, tgt, cost = src[ok], tgt[ok], cost[ok]
@@ -368,12 +349,12 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     """A target vertex for every source vertex, seeded by sparse ``correspondence``.
 
     Args:
-        shape_1, shape_2: :class:`~darcyan.pipeline.ShapeDescription` with their intermediate
-            results (from :func:`~darcyan.pipeline.analyze_mesh`, or ``describe_shape`` without a
-            cache): the prepared, area-1 meshes and their geodesic solvers are used.
+        shape_1, shape_2: the prepared shapes (:class:`~darcyan.geometry.shape.Shape`, or a
+            :class:`~darcyan.method.pipeline.ShapeAnalysis`, whose shape is used): their area-1
+            meshes, geodesic solvers and spectra.
         correspondence: anything with ``source_vertex (k,)`` and ``target_vertex (k,)`` in input
-            numbering (a :class:`~darcyan.pipeline.Correspondence`; ``distance (k,)`` breaks ties
-            between landmark sets).
+            numbering (a :class:`~darcyan.method.pipeline.Correspondence`; ``distance (k,)``
+            breaks ties between landmark sets).
         config: see :class:`DenseConfig`.
 
     Returns:
@@ -381,13 +362,14 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         numbering of shape 2 (:data:`UNMAPPED` for vertices outside the analysed mesh).
 
     Raises:
-        DarcyanError: when a description lacks its intermediates, or fewer than
-            :data:`MIN_LANDMARKS` usable landmark pairs remain.
+        DarcyanError: when a shape is a description only, or fewer than :data:`MIN_LANDMARKS`
+            usable landmark pairs remain.
     """
+    shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
     for shape in (shape_1, shape_2):
-        if shape.mesh is None or shape.solver is None:
-            raise DarcyanError(f"{shape.name}: a dense map needs the full description (describe the shape "
-                               f"without a cache)")
+        if not hasattr(shape, "mesh_index"):
+            raise DarcyanError(f"{shape.name}: a dense map works on prepared shapes, not on a description "
+                               f"(darcyan.load_shape(path) or darcyan.prepare_shape(mesh) gives one)")
     say = progress or (lambda stage: None)
     timings = {}
     t = time.perf_counter()
@@ -408,8 +390,8 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         timings["landmarks"] = time.perf_counter() - t
         t = time.perf_counter()
         say("basis")
-        _, basis_1, _ = laplace_beltrami_basis(shape_1.mesh, config.basis_size)
-        _, basis_2, _ = laplace_beltrami_basis(shape_2.mesh, config.basis_size)
+        basis_1 = _basis(shape_1, config.basis_size)
+        basis_2 = _basis(shape_2, config.basis_size)
         timings["basis"] = time.perf_counter() - t
         t = time.perf_counter()
         say("zoomout")
@@ -438,85 +420,3 @@ def dense_map_to_csv(target: np.ndarray) -> str:
     """CSV ``source_vertex,target_vertex``, one row per source vertex (0-based, input numbering)."""
     lines = ["source_vertex,target_vertex"] + [f"{s},{t}" for s, t in enumerate(np.asarray(target).tolist())]
     return "\n".join(lines) + "\n"
-
-
-# ----------------------------------------------------------------------------------------------
-# Evaluation
-
-
-@dataclass(frozen=True)
-class DenseEvaluation:
-    """Errors of a dense map on a sample of source vertices.
-
-    ``source_vertices (s,)`` input numbering; ``errors (s,)`` geodesic error / sqrt(target area).
-    """
-
-    source_vertices: np.ndarray
-    errors: np.ndarray
-    threshold: float = DEFAULT_THRESHOLD
-
-    @property
-    def rate(self) -> float:
-        """Share of sampled vertices within ``threshold``."""
-        return float((self.errors <= self.threshold).mean()) if len(self.errors) else 0.0
-
-    @property
-    def mean(self) -> float:
-        return float(self.errors.mean()) if len(self.errors) else float("nan")
-
-    def curve(self, taus=None) -> np.ndarray:
-        return cumulative_curve(self.errors) if taus is None else cumulative_curve(self.errors, taus)
-
-
-def evaluate_dense(source_mesh: Mesh, target_mesh: Mesh, target: np.ndarray, truth: GroundTruth = GroundTruth(),
-                   sample: int = DENSE_SAMPLE, seed: int = DENSE_SEED, target_solver: GeodesicSolver | None = None,
-                   threshold: float = DEFAULT_THRESHOLD) -> DenseEvaluation:
-    """Score the dense map ``target`` (source input vertex -> target input vertex).
-
-    ``source_mesh``/``target_mesh`` are the analysed meshes (``input_index`` relates them to the
-    files; errors are measured on ``target_mesh`` and divided by the square root of its area).
-    With identity ``truth`` the sample is drawn from the source vertices; with ``.vts`` truth
-    from the listed source samples (their correspondents are known exactly). ``sample`` vertices
-    are drawn with ``numpy.random.default_rng(seed)`` (all when fewer), so two maps of the same
-    pair are scored on the same vertices. Unmapped sampled vertices get an infinite error.
-    """
-    return evaluate_dense_maps(source_mesh, target_mesh, {"map": target}, truth, sample, seed, target_solver,
-                               threshold)["map"]
-
-
-def evaluate_dense_maps(source_mesh: Mesh, target_mesh: Mesh, targets: dict, truth: GroundTruth = GroundTruth(),
-                        sample: int = DENSE_SAMPLE, seed: int = DENSE_SEED,
-                        target_solver: GeodesicSolver | None = None,
-                        threshold: float = DEFAULT_THRESHOLD) -> dict:
-    """:func:`evaluate_dense` of several maps of one pair (``targets``: name -> map) at once: the
-    same sampled source vertices for all, one fast-marching field per true correspondent read
-    for every map (memory O(V)). Returns name -> :class:`DenseEvaluation`."""
-    if truth.source_samples is None:
-        candidates = source_mesh.input_index
-        true_targets = candidates
-    else:
-        candidates = np.asarray(truth.source_samples, dtype=np.int64)
-        true_targets = np.asarray(truth.target_samples, dtype=np.int64)
-    targets = {name: np.asarray(t, dtype=np.int64) for name, t in targets.items()}
-    shortest = min((len(t) for t in targets.values()), default=0)
-    in_source = _to_local(source_mesh, candidates) >= 0
-    true_local = _to_local(target_mesh, true_targets)
-    usable = np.flatnonzero(in_source & (true_local >= 0) & (candidates < shortest))
-    if len(usable) > sample:
-        usable = np.sort(np.random.default_rng(seed).choice(usable, size=sample, replace=False))
-    sources = candidates[usable]
-    truth_local = true_local[usable]
-    mapped = {name: _to_local(target_mesh, t[sources]) for name, t in targets.items()}
-    errors = {name: np.full(len(sources), np.inf) for name in targets}
-    solver = target_solver or GeodesicSolver(target_mesh)
-    scale = np.sqrt(target_mesh.area())
-    unique, inverse, counts = np.unique(truth_local, return_inverse=True, return_counts=True)
-    groups = np.split(np.argsort(inverse, kind="stable"), np.cumsum(counts)[:-1])
-    for q_true, rows in zip(unique, groups):
-        wanted = [(name, rows[m[rows] >= 0]) for name, m in mapped.items()]
-        if not any(len(r) for _, r in wanted):
-            continue
-        field = solver.distance(int(q_true))
-        for name, r in wanted:
-            errors[name][r] = field[mapped[name][r]] / scale
-    return {name: DenseEvaluation(sources, errors[name], threshold) for name in targets}

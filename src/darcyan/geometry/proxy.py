@@ -13,9 +13,10 @@ import warnings
 
 import numpy as np
 
-from .errors import DarcyanError
+from ..errors import DarcyanError
 from .geodesics import GeodesicSolver, interpolate
-from .mesh import Mesh, nonmanifold_vertices, prepare_mesh
+from .mesh import Mesh
+from .repair import nonmanifold_vertices, prepare_mesh
 
 
 class CoarseProxy:

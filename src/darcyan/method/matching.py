@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ConfigError
+from ..errors import ConfigError
 
 
 @dataclass(frozen=True)
@@ -121,7 +121,7 @@ def consistent_candidates(desc_1: np.ndarray, desc_2: np.ndarray, geodesics_1: n
     that break the metric (a left hand with a right foot). Unmatched sources contribute 0, so a
     point whose counterpart was not detected is left out rather than forced onto a wrong one. A
     mirror image keeps every distance: it scores like the true matching and is among the
-    candidates; :func:`darcyan.symmetry.choose_orientation` tells them apart.
+    candidates; :func:`darcyan.method.symmetry.choose_orientation` tells them apart.
 
     Args:
         desc_1, desc_2: ``(k1, d)``, ``(k2, d)`` descriptors.

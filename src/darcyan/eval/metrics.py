@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import MeshError
-from .geodesics import GeodesicSolver
-from .mesh import Mesh
+from ..errors import MeshError
+from ..geometry.geodesics import GeodesicSolver
+from ..geometry.mesh import Mesh
 
 DEFAULT_THRESHOLD = 0.05
 CURVE_TAUS = np.linspace(0.0, 0.25, 51)
@@ -273,7 +273,7 @@ def reflection_symmetry(mesh: Mesh, iterations: int = MIRROR_ITERATIONS) -> Mirr
     """
     from scipy.spatial import cKDTree
 
-    from .curvature import mixed_voronoi_area
+    from ..geometry.operators import mixed_voronoi_area
 
     scale = np.sqrt(mesh.area())
     x = mesh.vertices / scale

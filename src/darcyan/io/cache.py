@@ -28,7 +28,7 @@ def default_cache_dir() -> Path:
 
 def file_digest(path: str | os.PathLike) -> str:
     """sha1 of a file's bytes (and, for TOSCA ``.vert``/``.tri``, of its sibling too)."""
-    from .mesh import _read_bytes  # the same clear errors as loading
+    from .mesh_files import _read_bytes  # the same clear errors as loading
 
     path = Path(path)
     h = hashlib.sha1()

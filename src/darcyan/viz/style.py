@@ -55,7 +55,7 @@ def context():
             ...
             style.save(fig, "plot.png")
     """
-    from .errors import require
+    from ..errors import require
 
     matplotlib = require("matplotlib", "plot")
     matplotlib.use("Agg", force=False)  # files only, no display needed
@@ -64,7 +64,7 @@ def context():
 
 def figure(size: tuple = FIGURE_SIZE):
     """``(fig, ax)``: a new figure (call inside :func:`context`)."""
-    from .errors import require
+    from ..errors import require
 
     plt = require("matplotlib.pyplot", "plot")
     return plt.subplots(figsize=size)

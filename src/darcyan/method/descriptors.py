@@ -6,7 +6,7 @@ radial lines: ``[k1max, k1min, ..., knmax, knmin]``. A level whose points all le
 
 The mean over a level forgets the angle, and with it handedness: a left hand and a right hand
 give the same descriptor. :func:`angular_profiles` keeps the angular variation of the innermost
-levels, which :func:`darcyan.symmetry.handedness` compares in both turning senses.
+levels, which :func:`darcyan.method.symmetry.handedness` compares in both turning senses.
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ import warnings
 
 import numpy as np
 
-from .curvature import Curvatures
+from ..geometry.curvature import Curvatures
+from ..geometry.mesh import Mesh
 from .grid import DarcyanGrid
-from .mesh import Mesh
 
 
 def curvature_samples(mesh: Mesh, grid: DarcyanGrid, curvatures: Curvatures) -> np.ndarray:

@@ -21,9 +21,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .config import DarcyanConfig
-from .geodesics import GeodesicBall, GeodesicSolver, LocalGeodesicSolver, interpolate, vertex_gradient, vertex_normals
-from .mesh import Mesh
+from ..config import DarcyanConfig
+from ..geometry.geodesics import (
+    GeodesicBall,
+    GeodesicSolver,
+    LocalGeodesicSolver,
+    interpolate,
+    vertex_gradient,
+    vertex_normals,
+)
+from ..geometry.mesh import Mesh
 
 # Radial geodesics are traced this much beyond R: fast marching overestimates distance slightly,
 # so U reaches R a little later along the line than arc length does.

@@ -1,39 +1,49 @@
 """The method end to end: describe a shape, match two shapes.
 
-:func:`describe_shape` runs, for one mesh: preparation (checks, optional repair, largest
-component), denoising of crumpled surfaces, scale normalization to area 1, Meyer curvatures,
-AGD, extremities, a Darcyan grid around each and its curvature descriptor. :func:`match_shapes`
+:func:`analyze_shape` runs, for one prepared :class:`~darcyan.geometry.shape.Shape` (see
+:func:`~darcyan.geometry.shape.prepare_shape`): Meyer curvatures, AGD, extremities, a Darcyan
+grid around each and its curvature descriptor, and what the mirror test needs. Its
+:class:`ShapeAnalysis` keeps every intermediate result; the :class:`ShapeDescription` inside it is
+the record matching needs, the one :func:`describe_shape` caches on disk. :func:`match_shapes`
 matches two descriptions. Feature vertices are always reported in the numbering of the input file.
 """
 
 from __future__ import annotations
 
 import os
-import warnings
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .cache import ShapeCache, file_digest
-from .config import DarcyanConfig
-from .curvature import Curvatures, principal_curvatures
+from ..config import DarcyanConfig
+from ..errors import MeshError
+from ..geometry.curvature import Curvatures, principal_curvatures
+from ..geometry.geodesics import LocalGeodesicSolver
+from ..geometry.mesh import Mesh, MeshWarning
+from ..geometry.shape import Shape, prepare_shape
+from ..io.cache import ShapeCache, file_digest
+from ..io.mesh_files import load_mesh
 from .descriptors import angular_profiles, curvature_descriptors
-from .errors import MeshError
-from .features import (AGD, FeaturePoints, average_geodesic_distance, extremities, heat_diffuse,
-                       heat_kernel_diagonal, sharpest_tips)
-from .geodesics import GeodesicSolver, LocalGeodesicSolver, vertex_normals
-from .symmetry import PROFILE_LEVELS, OrientedSurface, choose_orientation, curvature_signature
-from .grid import DarcyanGrid, darcyan_grids, grid_reach
+from .features import (
+    AGD,
+    FeaturePoints,
+    average_geodesic_distance,
+    extremities,
+    heat_diffuse,
+    heat_kernel_diagonal,
+    sharpest_tips,
+)
+from .grid import darcyan_grids, grid_reach
 from .matching import Matches, consistent_candidates, drop_dissimilar, match_descriptors
-from .proxy import coarse_proxy
-from .mesh import Mesh, MeshWarning, Normalization, denoise_mesh, load_mesh, normalize_mesh, prepare_mesh
+from .symmetry import PROFILE_LEVELS, OrientedSurface, choose_orientation, curvature_signature
 
 
-@dataclass
+@dataclass(frozen=True)
 class ShapeDescription:
-    """Feature points of one shape and their descriptors.
+    """What matching needs of one shape: the record that the cache stores.
 
     Attributes:
         name: the file (or mesh name) described.
@@ -43,11 +53,9 @@ class ShapeDescription:
         descriptors: ``(k, 2n)`` ``[k1max, k1min, ...]`` per feature point, 1/sqrt(area) units.
         feature_geodesics: ``(k, k)`` geodesic distances between the feature points (sqrt(area)).
         surface: what the mirror test needs (positions, normals, feature distance fields, a point
-            signature) on the prepared, normalized mesh; see :mod:`darcyan.symmetry`.
+            signature) on the prepared mesh; see :mod:`darcyan.method.symmetry`.
         changes: repairs applied to the input (empty without ``repair``).
-        timings: seconds per stage.
-        mesh, normalization, curvatures, agd, features, grids, solver: the intermediate results
-            on the prepared, normalized mesh (``None`` when the description came from the cache).
+        timings: seconds per stage (``{"cache": 0.0}`` when read from the cache).
     """
 
     name: str
@@ -57,28 +65,72 @@ class ShapeDescription:
     descriptors: np.ndarray
     feature_geodesics: np.ndarray
     surface: OrientedSurface | None = None
-    changes: list = field(default_factory=list)
-    timings: dict = field(default_factory=dict)
-    mesh: Mesh | None = None
-    normalization: Normalization | None = None
-    curvatures: Curvatures | None = None
-    agd: AGD | None = None
-    features: FeaturePoints | None = None
-    grids: list | None = None
-    solver: GeodesicSolver | None = None
+    changes: tuple = ()
+    timings: dict = field(default_factory=dict, compare=False)
 
     def __len__(self) -> int:
         return len(self.feature_vertices)
 
     def arrays(self) -> dict:
-        """The cacheable part, as arrays."""
+        """The record as named arrays (what the cache stores)."""
         arrays = {"feature_vertices": self.feature_vertices, "feature_agd": self.feature_agd,
                   "descriptors": self.descriptors, "feature_geodesics": self.feature_geodesics,
                   "n_input_vertices": np.array(self.n_input_vertices),
-                  "changes": np.array(self.changes, dtype=str)}
+                  "changes": np.array(list(self.changes), dtype=str)}
         if self.surface is not None:
             arrays.update({f"surface_{k}": v for k, v in vars(self.surface).items() if v is not None})
         return arrays
+
+    @classmethod
+    def from_arrays(cls, name: str, stored: dict) -> "ShapeDescription":
+        """The record of :meth:`arrays` (as read from the cache) under ``name``."""
+        return cls(
+            name=name, n_input_vertices=int(stored["n_input_vertices"]),
+            feature_vertices=stored["feature_vertices"], feature_agd=stored["feature_agd"],
+            descriptors=stored["descriptors"], feature_geodesics=stored["feature_geodesics"],
+            surface=OrientedSurface(stored["surface_points"], stored["surface_normals"],
+                                    stored["surface_landmark_distances"], stored.get("surface_signature"),
+                                    stored.get("surface_areas"), stored.get("surface_profiles")),
+            changes=tuple(str(c) for c in stored["changes"]), timings={"cache": 0.0})
+
+
+@dataclass(frozen=True, eq=False)
+class ShapeAnalysis:
+    """A :class:`ShapeDescription` with the prepared :class:`~darcyan.geometry.shape.Shape` and the
+    intermediate results that made it (in memory only; see :func:`analyze_shape`).
+
+    Attributes:
+        shape: the prepared shape (mesh, solver, curvatures, ... on the area-1 mesh).
+        description: the record matching needs.
+        curvatures: the smoothed Meyer curvatures the descriptors sample.
+        agd: the AGD field; features: the feature points (prepared mesh's numbering);
+        grids: one :class:`~darcyan.method.grid.DarcyanGrid` per feature point.
+        timings: seconds per stage.
+    """
+
+    shape: Shape
+    description: ShapeDescription
+    curvatures: Curvatures
+    agd: AGD
+    features: FeaturePoints
+    grids: list
+    timings: dict = field(default_factory=dict)
+
+    # The record's fields and the shape's, read through (matching and dense maps take either).
+    name = property(lambda self: self.description.name)
+    n_input_vertices = property(lambda self: self.description.n_input_vertices)
+    feature_vertices = property(lambda self: self.description.feature_vertices)
+    feature_agd = property(lambda self: self.description.feature_agd)
+    descriptors = property(lambda self: self.description.descriptors)
+    feature_geodesics = property(lambda self: self.description.feature_geodesics)
+    surface = property(lambda self: self.description.surface)
+    changes = property(lambda self: self.description.changes)
+    mesh = property(lambda self: self.shape.mesh)
+    solver = property(lambda self: self.shape.solver)
+    normalization = property(lambda self: self.shape.normalization)
+
+    def __len__(self) -> int:
+        return len(self.description)
 
 
 @dataclass(frozen=True)
@@ -105,9 +157,19 @@ class Correspondence:
 
 
 def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
-                 progress=None) -> ShapeDescription:
-    """Describe an in-memory mesh (see the module docstring); keeps every intermediate result."""
-    timings = {}
+                 progress=None) -> ShapeAnalysis:
+    """Prepare ``mesh`` (:func:`~darcyan.geometry.shape.prepare_shape`) and :func:`analyze_shape` it."""
+    start = time.perf_counter()
+    if progress:
+        progress("prepare")
+    shape = prepare_shape(mesh, config, repair)
+    return analyze_shape(shape, config, progress, {"prepare": time.perf_counter() - start})
+
+
+def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progress=None,
+                  timings: dict | None = None) -> ShapeAnalysis:
+    """Describe a prepared shape (see the module docstring); keeps every intermediate result."""
+    timings = dict(timings or {})
     say = progress or (lambda stage: None)
 
     def stage(name):
@@ -117,28 +179,19 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     def done(name):
         timings[name] = time.perf_counter() - timings[name]
 
-    n_input = mesh.n_vertices
-    stage("prepare")
-    prepared, changes = prepare_mesh(mesh, repair=repair)
-    prepared, steps, area_ratio = denoise_mesh(prepared, config.denoise_area_ratio)
-    if steps:
-        warnings.warn(f"{mesh.name}: the surface is crumpled at the scale of its edges (its area is "
-                      f"{area_ratio:.2f} times that of a smoothed copy: vertex noise?); analysed after "
-                      f"{steps} Taubin smoothing steps", MeshWarning, stacklevel=2)
-    normalized, normalization = normalize_mesh(prepared)
+    normalized = shape.mesh
     edges = normalized.edges()
     mean_edge = float(np.linalg.norm(normalized.vertices[edges[:, 0]] - normalized.vertices[edges[:, 1]], axis=1).mean())
     if mean_edge > config.radius:
-        raise MeshError(mesh.name, f"mesh too small or coarse for a Darcyan grid of radius {config.radius}: "
-                                   f"its mean edge is {mean_edge:.3g} (lengths in sqrt(area) units; "
-                                   f"{normalized.n_vertices} vertices)")
-    solver = GeodesicSolver(normalized)
-    done("prepare")
+        raise MeshError(shape.name, f"mesh too small or coarse for a Darcyan grid of radius {config.radius}: "
+                                    f"its mean edge is {mean_edge:.3g} (lengths in sqrt(area) units; "
+                                    f"{normalized.n_vertices} vertices)")
+    solver = shape.solver
     stage("curvature")
-    curvatures = principal_curvatures(normalized, smoothing=config.curvature_smoothing)
+    curvatures = shape.curvatures(config.curvature_smoothing)
     done("curvature")
     stage("agd")
-    proxy = coarse_proxy(normalized, config.proxy_vertices)
+    proxy = shape.proxy(config.proxy_vertices)
     if proxy is None:
         agd = average_geodesic_distance(normalized, solver, config.agd_sources, config.agd_smoothing)
     else:
@@ -160,9 +213,9 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     distances: dict = {}
     features = extremities(normalized, local, agd, config, distances)
     if len(features) == 0:
-        raise MeshError(mesh.name, "no feature points found (no extremity stands out on this shape)")
+        raise MeshError(shape.name, "no feature points found (no extremity stands out on this shape)")
     if config.tip_gain > 0 and config.agd_smoothing > 0:
-        heat = _heat_kernel(normalized, proxy, config)
+        heat = _heat_kernel(shape, proxy, config)
         features = sharpest_tips(features, agd.values, heat, distances, config)
     done("features")
     stage("descriptors")
@@ -171,40 +224,39 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     grids = darcyan_grids(normalized, local, features.vertices, config, distances, toward=centre)
     descriptors = curvature_descriptors(normalized, grids, curvatures)
     if not np.isfinite(descriptors).any(axis=1).any():
-        raise MeshError(mesh.name, f"mesh too small to carry a Darcyan grid of radius {config.radius} "
-                                   f"(in sqrt(area) units)")
+        raise MeshError(shape.name, f"mesh too small to carry a Darcyan grid of radius {config.radius} "
+                                    f"(in sqrt(area) units)")
     done("descriptors")
     stage("layout")
     geodesics = feature_geodesics(features.vertices, distances)
     surface = OrientedSurface(
-        normalized.vertices.astype(np.float32), vertex_normals(normalized).astype(np.float32),
+        normalized.vertices.astype(np.float32), shape.normals.astype(np.float32),
         np.array([distances[int(v)] for v in features.vertices], dtype=np.float32),
-        _signature(normalized, curvatures, proxy, config).astype(np.float32), curvatures.area.astype(np.float32),
+        _signature(shape, proxy, config).astype(np.float32), curvatures.area.astype(np.float32),
         angular_profiles(normalized, grids, curvatures, PROFILE_LEVELS).astype(np.float32))
     done("layout")
-    return ShapeDescription(
-        name=mesh.name, n_input_vertices=n_input,
+    description = ShapeDescription(
+        name=shape.name, n_input_vertices=shape.n_input_vertices,
         feature_vertices=normalized.input_index[features.vertices], feature_agd=features.agd,
         descriptors=descriptors, feature_geodesics=geodesics, surface=surface,
-        changes=changes, timings=timings, mesh=normalized,
-        normalization=normalization, curvatures=curvatures, agd=agd, features=features, grids=grids,
-        solver=solver)
+        changes=tuple(shape.changes), timings=timings)
+    return ShapeAnalysis(shape, description, curvatures, agd, features, grids, timings)
 
 
-def _heat_kernel(mesh: Mesh, proxy, config: DarcyanConfig) -> np.ndarray:
+def _heat_kernel(shape: Shape, proxy, config: DarcyanConfig) -> np.ndarray:
     """``(n,)`` heat kernel diagonal at the AGD diffusion's scale, on the proxy when it has at
     least ``HEAT_KERNEL_VERTICES`` vertices, else on a copy of that size or the mesh itself."""
     if proxy is None or proxy.mesh.n_vertices < HEAT_KERNEL_VERTICES:
-        proxy = coarse_proxy(mesh, HEAT_KERNEL_VERTICES)
+        proxy = shape.proxy(HEAT_KERNEL_VERTICES)
     if proxy is None:
-        return heat_kernel_diagonal(mesh, config.agd_smoothing)
+        return heat_kernel_diagonal(shape.mesh, config.agd_smoothing)
     return proxy.to_full(heat_kernel_diagonal(proxy.mesh, config.agd_smoothing))
 
 
-def _signature(mesh: Mesh, curvatures: Curvatures, proxy, config: DarcyanConfig) -> np.ndarray:
+def _signature(shape: Shape, proxy, config: DarcyanConfig) -> np.ndarray:
     """The mirror test's point signature, on the coarse proxy when there is one."""
     if proxy is None:
-        return curvature_signature(mesh, curvatures.mean)
+        return curvature_signature(shape.mesh, shape.curvatures(config.curvature_smoothing).mean)
     coarse_mean = principal_curvatures(proxy.mesh, smoothing=config.curvature_smoothing).mean
     return proxy.to_full(curvature_signature(proxy.mesh, coarse_mean))
 
@@ -215,12 +267,24 @@ def feature_geodesics(vertices: np.ndarray, distances: dict) -> np.ndarray:
     return 0.5 * (geodesics + geodesics.T)  # fast marching is not exactly symmetric
 
 
+def load_shape(path: str | os.PathLike, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
+               warn: bool = True) -> Shape:
+    """The :class:`~darcyan.geometry.shape.Shape` of a mesh file, prepared exactly as
+    :func:`describe_shape` prepares it (``warn=False``: without saying again what a description
+    of the same file already said)."""
+    with warnings.catch_warnings():
+        if not warn:
+            warnings.simplefilter("ignore", MeshWarning)
+        return prepare_shape(load_mesh(path), config, repair)
+
+
 def describe_shape(source: str | os.PathLike | Mesh, config: DarcyanConfig = DarcyanConfig(),
                    repair: bool = False, cache: ShapeCache | None = None, progress=None) -> ShapeDescription:
-    """Describe a mesh file (or :class:`Mesh`); with ``cache``, reuse earlier work on the same
-    file content and parameters (then the intermediate results are ``None``)."""
+    """The :class:`ShapeDescription` of a mesh file (or :class:`Mesh`); with ``cache``, reuse
+    earlier work on the same file content and parameters. (:func:`analyze_mesh` keeps the
+    intermediate results too.)"""
     if isinstance(source, Mesh):
-        return analyze_mesh(source, config, repair, progress)
+        return analyze_mesh(source, config, repair, progress).description
     path = Path(source)
     key = _cache_key(cache, path, config, repair)
     stored = _cached(cache, key, path)
@@ -228,7 +292,7 @@ def describe_shape(source: str | os.PathLike | Mesh, config: DarcyanConfig = Dar
         return stored
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", MeshWarning)
-        description = analyze_mesh(load_mesh(path), config, repair, progress)
+        description = analyze_mesh(load_mesh(path), config, repair, progress).description
     said = _reemit(caught)
     if cache is not None:
         cache.save(key, {**description.arrays(), "warnings": np.array(said, dtype=str)})
@@ -274,7 +338,7 @@ def _describe_arrays(task: tuple) -> tuple:
     # eigensolver, and with it `darcyan match` on the 52k humans, 1.5 to 3 times slower).
     with warnings.catch_warnings(record=True) as caught, threadpool_limits(1):
         warnings.simplefilter("always", MeshWarning)
-        arrays = analyze_mesh(load_mesh(path), config, repair).arrays()
+        arrays = analyze_mesh(load_mesh(path), config, repair).description.arrays()
     return arrays, [str(w.message) for w in caught if issubclass(w.category, MeshWarning)]
 
 
@@ -296,15 +360,7 @@ def _cached(cache: ShapeCache | None, key: str | None, path: Path) -> ShapeDescr
 
 
 def _from_arrays(path: Path, stored: dict) -> ShapeDescription:
-    return ShapeDescription(
-        name=str(path), n_input_vertices=int(stored["n_input_vertices"]),
-        feature_vertices=stored["feature_vertices"], feature_agd=stored["feature_agd"],
-        descriptors=stored["descriptors"], feature_geodesics=stored["feature_geodesics"],
-        surface=OrientedSurface(stored["surface_points"], stored["surface_normals"],
-                                stored["surface_landmark_distances"], stored.get("surface_signature"),
-                                stored.get("surface_areas"), stored.get("surface_profiles")),
-        changes=[str(c) for c in stored["changes"]],
-        timings={"cache": 0.0})
+    return ShapeDescription.from_arrays(str(path), stored)
 
 
 def _reemit(caught: list) -> list:

@@ -18,10 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .config import DarcyanConfig
-from .curvature import mixed_voronoi_area
-from .geodesics import GeodesicSolver, LocalGeodesicSolver
-from .mesh import Mesh
+from ..config import DarcyanConfig
+from ..geometry.geodesics import GeodesicSolver, LocalGeodesicSolver
+from ..geometry.mesh import Mesh
+from ..geometry.operators import mixed_voronoi_area
 
 
 @dataclass(frozen=True)
@@ -92,7 +92,7 @@ def heat_diffuse(mesh: Mesh, values: np.ndarray, length: float, area: np.ndarray
     import scipy.sparse as sp
     from scipy.sparse.linalg import splu
 
-    from .curvature import cotangent_laplacian
+    from ..geometry.operators import cotangent_laplacian
 
     area = mixed_voronoi_area(mesh) if area is None else area
     step = length**2 / 2 / HEAT_STEPS
@@ -122,10 +122,10 @@ def heat_kernel_diagonal(mesh: Mesh, length: float) -> np.ndarray:
     heat kernel signature at one time; 1/area units) from the Laplace-Beltrami eigenpairs whose
     ``exp(-lambda t)`` exceeds ``exp(-HEAT_KERNEL_DECAY)`` (Weyl's law: about
     ``HEAT_KERNEL_DECAY / (4 pi t)`` of them on a surface of area 1). Unlike the HKS baseline
-    (:func:`darcyan.baselines.heat_kernel_signature`: many times, scaled by the heat trace,
+    (:func:`darcyan.eval.baselines.heat_kernel_signature`: many times, scaled by the heat trace,
     without the constant eigenfunction) one time, unscaled, so that ratios between vertices are
     those of the kernel itself."""
-    from .baselines import laplace_beltrami_spectrum
+    from ..geometry.spectral import laplace_beltrami_spectrum
 
     time = length**2 / 2
     count = int(np.clip(np.ceil(HEAT_KERNEL_DECAY * mesh.area() / (4 * np.pi * time)), 10, 400))

@@ -1,6 +1,6 @@
 """Pictures of the method: a Darcyan grid on a surface, and matched feature points of two shapes.
 
-Two steps, so the PNG pictures here and the interactive viewer (:mod:`darcyan.viewer`) show the
+Two steps, so the PNG pictures here and the interactive viewer (:mod:`darcyan.viz.html`) show the
 same thing:
 
 * a *scene* holds what is drawn, computed on the full mesh with the method's own code:
@@ -31,12 +31,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import DarcyanConfig
-from .errors import DarcyanError, MeshError, require
-from .evaluation import DEFAULT_THRESHOLD, GroundTruth, read_vts
-from .geodesics import GeodesicSolver, interpolate, vertex_normals
-from .grid import DarcyanGrid
-from .mesh import Mesh, load_mesh, normalize_mesh, prepare_mesh
+from ..config import DarcyanConfig
+from ..errors import DarcyanError, MeshError, require
+from ..eval.metrics import DEFAULT_THRESHOLD, GroundTruth, read_vts
+from ..geometry.geodesics import GeodesicSolver, interpolate, vertex_normals
+from ..geometry.mesh import Mesh
+from ..geometry.shape import Shape, prepare_shape
+from ..io.mesh_files import load_mesh
+from ..method.grid import DarcyanGrid
 
 CURVATURES = ("kmax", "kmin")
 
@@ -72,7 +74,7 @@ MATCH_MARKER_AREA = 110.0
 WRONG_MARKER = "s"  # wrong matches: squares (the right ones are discs)
 RIGHT_MARKER = "o"
 TRUTH_MARKER_AREA = 260.0  # a ring around the true point, wider than a marker
-# Extra colours beyond darcyan.style.PALETTE (black excluded: it draws edges and text).
+# Extra colours beyond darcyan.viz.style.PALETTE (black excluded: it draws edges and text).
 EXTRA_MATCH_COLOURS = ("#7B3294", "#1B7837", "#B2182B", "#2166AC", "#8C510A", "#01665E",
                        "#C51B7D", "#4D9221", "#E08214", "#542788")
 
@@ -170,7 +172,7 @@ def cut_radial_line(mesh: Mesh, solver: GeodesicSolver, distance: np.ndarray, pa
                     radius: float) -> np.ndarray:
     """The part of a traced radial geodesic ``path (k, 3)`` where the distance field U (V,) from
     its centre has not yet reached ``radius``: ``(j, 3)``, ending on the level curve U = radius
-    (as :mod:`darcyan.grid` cuts it)."""
+    (as :mod:`darcyan.method.grid` cuts it)."""
     if len(path) < 2:
         return path
     faces, bary = solver.locate(path)
@@ -212,7 +214,7 @@ class GridScene:
     Attributes:
         mesh: the prepared, normalized (area 1) mesh; ``mesh.input_index`` maps to the file.
         name: the shape's name (file).
-        grid: the grid (see :class:`darcyan.grid.DarcyanGrid`).
+        grid: the grid (see :class:`darcyan.method.grid.DarcyanGrid`).
         centre_input: the centre as a vertex index of the input file.
         feature: which feature point (row of ``darcyan features``) the centre is, or ``None``.
         curvature: ``"kmax"`` or ``"kmin"``, the curvature the points are coloured by.
@@ -251,15 +253,13 @@ def _load(source) -> tuple[Mesh, str]:
     return load_mesh(source), str(source)
 
 
-def _mesh_index(mesh: Mesh, name: str, input_vertex: int, n_input: int) -> int:
-    """The prepared mesh's index of file vertex ``input_vertex`` (refused if it was left out)."""
-    if not 0 <= input_vertex < n_input:
-        raise MeshError(name, f"vertex {input_vertex} out of range 0..{n_input - 1}")
-    hit = np.flatnonzero(mesh.input_index == input_vertex)
-    if len(hit) == 0:
-        raise MeshError(name, f"vertex {input_vertex} is not on the prepared mesh (it belongs to a part "
-                              f"that was left out)")
-    return int(hit[0])
+def _mesh_index(shape: Shape, input_vertex: int) -> int:
+    """The prepared mesh's index of input vertex ``input_vertex`` (refused if it was left out)."""
+    index = int(shape.mesh_index([input_vertex])[0])
+    if index < 0:
+        raise MeshError(shape.name, f"vertex {input_vertex} is not on the prepared mesh (it belongs to a part "
+                                    f"that was left out)")
+    return index
 
 
 def grid_scene(source: str | os.PathLike | Mesh, vertex: int | None = None, feature: int | None = None,
@@ -278,9 +278,8 @@ def grid_scene(source: str | os.PathLike | Mesh, vertex: int | None = None, feat
         curvature: ``"kmax"`` or ``"kmin"``.
         repair: as for :func:`darcyan.prepare_mesh`.
     """
-    from .curvature import principal_curvatures
-    from .grid import darcyan_grid
-    from .pipeline import analyze_mesh
+    from ..method.grid import darcyan_grid
+    from ..method.pipeline import analyze_mesh
 
     if curvature not in CURVATURES:
         raise DarcyanError(f"curvature must be one of {CURVATURES}, got {curvature!r}")
@@ -289,19 +288,18 @@ def grid_scene(source: str | os.PathLike | Mesh, vertex: int | None = None, feat
     mesh, name = _load(source)
     if vertex is None:
         feature = 0 if feature is None else int(feature)
-        shape = analyze_mesh(mesh, config, repair, progress)
-        if not 0 <= feature < len(shape):
-            raise MeshError(name, f"feature point {feature} out of range: the shape has {len(shape)} "
-                                  f"(0..{len(shape) - 1})")
-        normalized, solver, curv = shape.mesh, shape.solver, shape.curvatures
-        grid = shape.grids[feature]
-        centre_input = int(shape.feature_vertices[feature])
+        analysis = analyze_mesh(mesh, config, repair, progress)
+        if not 0 <= feature < len(analysis):
+            raise MeshError(name, f"feature point {feature} out of range: the shape has {len(analysis)} "
+                                  f"(0..{len(analysis) - 1})")
+        normalized, solver, curv = analysis.mesh, analysis.solver, analysis.curvatures
+        grid = analysis.grids[feature]
+        centre_input = int(analysis.feature_vertices[feature])
     else:
-        prepared, _ = prepare_mesh(mesh, repair=repair)
-        normalized, _ = normalize_mesh(prepared)
-        centre = _mesh_index(normalized, name, int(vertex), mesh.n_vertices)
-        solver = GeodesicSolver(normalized)
-        curv = principal_curvatures(normalized, smoothing=config.curvature_smoothing)
+        shape = prepare_shape(mesh, config, repair)
+        normalized, solver = shape.mesh, shape.solver
+        centre = _mesh_index(shape, int(vertex))
+        curv = shape.curvatures(config.curvature_smoothing)
         grid = darcyan_grid(normalized, solver, centre, config)
         centre_input = int(vertex)
     distance = solver.distance(grid.centre)
@@ -413,17 +411,14 @@ def match_scene(source, target, correspondence, truth: GroundTruth | None = None
     files' numbering) on ``source`` and ``target`` (files or :class:`Mesh`), scored against
     ``truth`` when given: error = geodesic distance on the area-1 target from the matched point
     to the true one."""
-    from .curvature import principal_curvatures
-
-    views, sizes = [], []
-    for shape, vertices in ((source, correspondence.source_vertex), (target, correspondence.target_vertex)):
-        mesh, name = _load(shape)
-        prepared, _ = prepare_mesh(mesh, repair=repair)
-        normalized, _ = normalize_mesh(prepared)
-        points = np.array([_mesh_index(normalized, name, int(v), mesh.n_vertices) for v in vertices], dtype=np.int64)
-        curv = principal_curvatures(normalized, smoothing=config.curvature_smoothing)
-        views.append(ShapeView(normalized, name, points, curv.kmax, curv.kmin))
-        sizes.append(mesh.n_vertices)
+    views, sizes, shapes = [], [], []
+    for given, vertices in ((source, correspondence.source_vertex), (target, correspondence.target_vertex)):
+        shape = given if isinstance(given, Shape) else prepare_shape(_load(given)[0], config, repair)
+        points = np.array([_mesh_index(shape, int(v)) for v in vertices], dtype=np.int64)
+        curv = shape.curvatures(config.curvature_smoothing)
+        views.append(ShapeView(shape.mesh, shape.name, points, curv.kmax, curv.kmin))
+        sizes.append(shape.n_input_vertices)
+        shapes.append(shape)
     errors = truth_points = None
     if truth is not None:
         if truth.source_samples is not None:
@@ -433,7 +428,7 @@ def match_scene(source, target, correspondence, truth: GroundTruth | None = None
                                                f"1..{size}")
         truth_points = _true_correspondents(truth, views[0].mesh, views[0].points, views[1].mesh, sizes[1])
         errors = np.full(len(truth_points), np.nan)
-        solver = GeodesicSolver(views[1].mesh)
+        solver = shapes[1].solver
         scale = np.sqrt(views[1].mesh.area())
         for i, (q, q_true) in enumerate(zip(views[1].points, truth_points)):
             if q_true >= 0:
@@ -698,8 +693,8 @@ def render_matches(scene: MatchScene, path: str | os.PathLike, title: str | None
     distances in the legend; with ground truth, wrong matches are squares marked with a cross,
     their true correspondent a black ring."""
     start = time.perf_counter()
-    from matplotlib.lines import Line2D
     import matplotlib.patheffects as effects
+    from matplotlib.lines import Line2D
 
     fig = _figure(MATCH_SIZE, MATCH_DPI)
     k = len(scene)

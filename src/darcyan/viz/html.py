@@ -1,8 +1,8 @@
 """Interactive views in one self-contained HTML file (plotly, its JavaScript inlined).
 
-:func:`grid_html` shows a :class:`darcyan.viz.GridScene` (the surface around the centre, the
+:func:`grid_html` shows a :class:`darcyan.viz.scenes.GridScene` (the surface around the centre, the
 level curves, the radial lines and the intersection points coloured by curvature);
-:func:`matches_html` a :class:`darcyan.viz.MatchScene` (both shapes side by side, each matched
+:func:`matches_html` a :class:`darcyan.viz.scenes.MatchScene` (both shapes side by side, each matched
 pair linked by a line of its colour). The page needs no network access: plotly.js is written
 into the file (about 5 MB). Shapes rotate (drag), zoom (wheel) and pan (right drag); hovering
 a point shows its vertex index (the input file's numbering), curvature and distance.
@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DarcyanError, require
-from .geodesics import vertex_normals
-from .mesh import Mesh
-from .viz import GRID_CMAP, MatchScene, GridScene, cluster_faces, match_colours
+from ..errors import DarcyanError, require
+from ..geometry.geodesics import vertex_normals
+from ..geometry.mesh import Mesh
+from .scenes import GRID_CMAP, GridScene, MatchScene, cluster_faces, match_colours
 
 HTML_FACE_BUDGET = 40_000  # triangles per shape written to the page before clustering
 SURFACE_COLOUR = "#CCCCCC"

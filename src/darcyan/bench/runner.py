@@ -8,12 +8,12 @@ vertex counts). Pairs are every ordered pair within a class, or the ``source<TAB
 of a pairs file.
 
 Every method is evaluated at darcyan's own feature points of the source shape, on the same
-targets and with the same metric (:mod:`darcyan.evaluation`), so the tables compare
+targets and with the same metric (:mod:`darcyan.eval.metrics`), so the tables compare
 descriptors, not set-ups:
 
 - ``darcyan``: the Darcyan curvature descriptor, matched by :func:`darcyan.match_shapes` with
   the run's configuration (``config.matching``);
-- ``hks`` / ``wks``: heat / wave kernel signatures (:mod:`darcyan.baselines`) at the same
+- ``hks`` / ``wks``: heat / wave kernel signatures (:mod:`darcyan.eval.baselines`) at the same
   feature points, matched by the same function (the descriptors swapped in);
 - ``pyfm``: pyfmaps' dense functional map read at the source feature points.
 
@@ -53,12 +53,22 @@ from pathlib import Path
 
 import numpy as np
 
-from .cache import ShapeCache, file_digest
-from .config import DarcyanConfig
-from .errors import DarcyanError, MeshError, require
-from .dense import DENSE_SAMPLE, DENSE_SEED
-from .evaluation import (CURVE_TAUS, DEFAULT_THRESHOLD, input_to_mesh_index, mirror_agreement,
-                         nearest_samples, read_vts, reflection_symmetry, score_pair, summarize)
+from ..config import DarcyanConfig
+from ..errors import DarcyanError, require
+from ..eval.dense_scores import DENSE_SAMPLE, DENSE_SEED
+from ..eval.metrics import (
+    CURVE_TAUS,
+    DEFAULT_THRESHOLD,
+    mirror_agreement,
+    nearest_samples,
+    read_vts,
+    reflection_symmetry,
+    score_pair,
+    summarize,
+)
+from ..geometry import spectral as lbo
+from ..geometry.shape import Shape
+from ..io.cache import ShapeCache, file_digest
 
 METHODS = ("darcyan", "hks", "wks", "pyfm")
 DENSE_METHODS = ("darcyan", "pyfm")  # dense maps of --dense (pyfm only when it is among the methods)
@@ -208,7 +218,7 @@ class BenchSettings:
             return None
         import dataclasses
 
-        from . import dense
+        from ..dense import maps as dense
 
         return {"samples": self.dense_samples, "seed": self.dense_seed,
                 "config": dataclasses.asdict(dense.DenseConfig()),
@@ -217,11 +227,11 @@ class BenchSettings:
                          "subsample_step": dense.PYFM_SUBSAMPLE_STEP, "weights": dict(dense.PYFM_WEIGHTS)}}
 
     def as_dict(self) -> dict:
-        from . import baselines
+        from ..eval import baselines
 
         return {"methods": list(self.methods), "threshold": self.threshold, "config": self.config.as_dict(),
                 "laplacian": self.laplacian, "repair": self.repair, "dense": self.dense_settings(),
-                "baselines": {"spectrum_size": baselines.SPECTRUM_SIZE,
+                "baselines": {"spectrum_size": lbo.SPECTRUM_SIZE,
                               "signature_samples": baselines.SIGNATURE_SAMPLES,
                               "pyfm_spectrum": baselines.PYFM_SPECTRUM, "pyfm_k": baselines.PYFM_K,
                               "pyfm_zoomout_steps": baselines.PYFM_ZOOMOUT_STEPS}}
@@ -239,41 +249,20 @@ class BenchSettings:
 # Per-shape work (runs in workers)
 
 
-@dataclass
-class _Prepared:
-    mesh: object  # prepared, normalized Mesh
-    positions: np.ndarray  # (n_input, 3) input vertices in the normalized frame
-    n_input: int
-    _solver: object = None
-
-    @property
-    def solver(self):
-        if self._solver is None:
-            from .geodesics import GeodesicSolver
-
-            self._solver = GeodesicSolver(self.mesh)
-        return self._solver
-
-    def index(self, input_vertices) -> np.ndarray:
-        return input_to_mesh_index(self.mesh, input_vertices, self.positions)
-
-
 _MEMO: OrderedDict = OrderedDict()
 
 
-def prepared_shape(path: str | os.PathLike, repair: bool = False) -> _Prepared:
-    """The mesh of ``path`` prepared and scaled to area 1, as :func:`darcyan.analyze_mesh`
-    sees it (memoized for the last few files of this process)."""
-    from .mesh import load_mesh, normalize_mesh, prepare_mesh
-
-    key = (str(path), repair)
+def prepared_shape(path: str | os.PathLike, repair: bool = False, config: DarcyanConfig = DarcyanConfig()) -> Shape:
+    """The :class:`~darcyan.geometry.shape.Shape` of ``path``, prepared exactly as the description
+    was (:func:`~darcyan.geometry.shape.prepare_shape`), memoized for the last few files of this
+    process (with the operators built on it)."""
+    key = (str(path), repair, config.prepare_fingerprint())
     if key in _MEMO:
         _MEMO.move_to_end(key)
         return _MEMO[key]
-    original = load_mesh(path)
-    prepared, _ = prepare_mesh(original, repair=repair)
-    mesh, norm = normalize_mesh(prepared)
-    item = _Prepared(mesh, (original.vertices - norm.centre) * norm.scale, original.n_vertices)
+    from ..method.pipeline import load_shape
+
+    item = load_shape(path, config, repair, warn=False)  # the description already said what it changed
     _MEMO[key] = item
     while len(_MEMO) > PREPARED_MEMO:
         _MEMO.popitem(last=False)
@@ -306,8 +295,8 @@ def _shape_task(task: dict) -> dict:
 
 
 def _shape_work(task: dict) -> dict:
-    from . import baselines
-    from .pipeline import describe_shape
+    from ..eval import baselines
+    from ..method.pipeline import describe_shape
 
     settings: BenchSettings = task["settings"]
     path, repair = Path(task["path"]), settings.repair
@@ -319,7 +308,7 @@ def _shape_work(task: dict) -> dict:
     seconds["darcyan"] = time.perf_counter() - start
     features = np.asarray(description.feature_vertices, dtype=np.int64)
     record = {"name": task["name"], "n_input_vertices": int(description.n_input_vertices),
-              "features": features, "description": _light(description),
+              "features": features, "description": description,
               "descriptors": {"darcyan": description.descriptors}, "seconds": seconds}
     feature_key = file_digest_bytes(features.tobytes())
 
@@ -327,9 +316,9 @@ def _shape_work(task: dict) -> dict:
     if spectral:
         start = time.perf_counter()
         spectrum_arrays, _ = _cached(
-            cache, (digest, "spectrum", settings.laplacian, str(baselines.SPECTRUM_SIZE), f"repair={repair}"),
-            lambda: _spectrum_arrays(prepared_shape(path, repair).mesh, settings.laplacian))
-        spectrum = baselines.Spectrum(spectrum_arrays["values"], spectrum_arrays["vectors"].astype(np.float64),
+            cache, (digest, "spectrum", settings.laplacian, str(lbo.SPECTRUM_SIZE), f"repair={repair}", settings.config.prepare_fingerprint()),
+            lambda: _spectrum_arrays(prepared_shape(path, repair, settings.config), settings.laplacian))
+        spectrum = lbo.Spectrum(spectrum_arrays["values"], spectrum_arrays["vectors"].astype(np.float64),
                                       spectrum_arrays["mass"])
         # Feature points lie on the prepared mesh: its input_index (cached with the spectrum) finds them.
         inverse = np.full(description.n_input_vertices, -1, dtype=np.int64)
@@ -340,26 +329,17 @@ def _shape_work(task: dict) -> dict:
             seconds[method] = time.perf_counter() - start
     if "pyfm" in settings.methods and cache is not None:
         start = time.perf_counter()
-        _cached(cache, (digest, "pyfm-spectrum", str(baselines.PYFM_SPECTRUM), f"repair={repair}"),
-                lambda: _pyfm_spectrum_arrays(prepared_shape(path, repair).mesh))
+        _cached(cache, (digest, "pyfm-spectrum", str(baselines.PYFM_SPECTRUM), f"repair={repair}",
+                        settings.config.prepare_fingerprint()),
+                lambda: _pyfm_spectrum_arrays(prepared_shape(path, repair, settings.config).mesh))
         seconds["pyfm"] = time.perf_counter() - start
     if task.get("vts"):
         arrays, _ = _cached(
-            cache, (digest, "nearest-samples", file_digest(task["vts"]), feature_key, f"repair={repair}"),
-            lambda: {"nearest": _nearest_samples(path, repair, features, task["vts"], description.n_input_vertices)})
+            cache, (digest, "nearest-samples", file_digest(task["vts"]), feature_key, f"repair={repair}",
+                   settings.config.prepare_fingerprint()),
+            lambda: {"nearest": _nearest_samples(path, repair, settings.config, features, task["vts"], description.n_input_vertices)})
         record["nearest_sample"] = arrays["nearest"]
     return record
-
-
-INTERMEDIATES = ("mesh", "normalization", "curvatures", "agd", "features", "grids", "solver")
-
-
-def _light(description):
-    """The description without its intermediate results (small, and picklable for workers)."""
-    import dataclasses
-
-    names = {f.name for f in dataclasses.fields(description)}
-    return dataclasses.replace(description, **{k: None for k in INTERMEDIATES if k in names})
 
 
 def file_digest_bytes(data: bytes) -> str:
@@ -368,25 +348,23 @@ def file_digest_bytes(data: bytes) -> str:
     return hashlib.sha1(data).hexdigest()
 
 
-def _spectrum_arrays(mesh, laplacian: str) -> dict:
-    from . import baselines
-
-    s = baselines.laplace_beltrami_spectrum(mesh, laplacian=laplacian)
+def _spectrum_arrays(shape: Shape, laplacian: str) -> dict:
+    s = shape.spectrum(lbo.SPECTRUM_SIZE, laplacian=laplacian)
     return {"values": s.values, "vectors": s.vectors.astype(np.float32), "mass": s.mass,
-            "input_index": mesh.input_index}
+            "input_index": shape.mesh.input_index}
 
 
 def _pyfm_spectrum_arrays(mesh) -> dict:
-    from . import baselines
+    from ..eval import baselines
 
     values, vectors = baselines.pyfm_spectrum(mesh)
     return {"values": values, "vectors": vectors.astype(np.float32)}
 
 
-def _nearest_samples(path, repair, features, vts_path, n_input) -> np.ndarray:
-    shape = prepared_shape(path, repair)
+def _nearest_samples(path, repair, config, features, vts_path, n_input) -> np.ndarray:
+    shape = prepared_shape(path, repair, config)
     samples = read_vts(vts_path, n_input)
-    return nearest_samples(shape.solver, shape.index(features), shape.index(samples))
+    return nearest_samples(shape.solver, shape.mesh_index(features, nearest=True), shape.mesh_index(samples, nearest=True))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -399,7 +377,7 @@ def class_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: ShapeC
     All poses of such a class share one vertex numbering, so a mirror map found on one pose holds
     for all: the poses are tried in pose order and the first whose best reflection plane leaves a
     residual of at most ``MIRROR_MAX_RESIDUAL`` (a symmetric rest pose) gives the map
-    (:func:`darcyan.evaluation.reflection_symmetry`, in input numbering). Returns
+    (:func:`darcyan.eval.metrics.reflection_symmetry`, in input numbering). Returns
     ``{"shape", "residual", "vertices"}`` (``vertices`` ``None`` when no pose is symmetric: then
     no symmetric flip is counted for this class).
     """
@@ -420,11 +398,11 @@ def class_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: ShapeC
 def _mirror_arrays(path, repair) -> dict:
     shape = prepared_shape(path, repair)
     mirror = reflection_symmetry(shape.mesh)
-    vertices = np.full(shape.n_input, -1, dtype=np.int64)
+    vertices = np.full(shape.n_input_vertices, -1, dtype=np.int64)
     vertices[shape.mesh.input_index] = shape.mesh.input_index[mirror.vertices]
     missing = vertices < 0  # file vertices left out by preparation: the image of their nearest vertex
     if missing.any():
-        vertices[missing] = shape.mesh.input_index[mirror.vertices[shape.index(np.flatnonzero(missing))]]
+        vertices[missing] = shape.mesh.input_index[mirror.vertices[shape.mesh_index(np.flatnonzero(missing), nearest=True)]]
     return {"vertices": vertices, "residual": np.array(mirror.residual)}
 
 
@@ -445,19 +423,19 @@ def validate_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: Sha
         arrays, _ = _cached(cache, (file_digest(path), "mirror", f"repair={repair}"),
                             lambda: _mirror_arrays(path, repair))
         shape = prepared_shape(path, repair)
-        listed = read_vts(dataset.vts(name), shape.n_input)
-        listed_sym = read_vts(sym, shape.n_input)
+        listed = read_vts(dataset.vts(name), shape.n_input_vertices)
+        listed_sym = read_vts(sym, shape.n_input_vertices)
         pick = np.linspace(0, len(listed) - 1, min(samples, len(listed))).astype(np.int64)
         errors = mirror_agreement(shape.solver, _prepared_mirror(shape, arrays["vertices"]),
-                                  shape.index(listed[pick]), shape.index(listed_sym[pick]))
+                                  shape.mesh_index(listed[pick], nearest=True), shape.mesh_index(listed_sym[pick], nearest=True))
         return {"shape": name, "residual": float(arrays["residual"]), "median_error": float(np.median(errors)),
                 "within_threshold": float((errors <= DEFAULT_THRESHOLD).mean()), "samples": int(len(pick))}
     return None
 
 
-def _prepared_mirror(shape: _Prepared, mirror_input: np.ndarray) -> np.ndarray:
+def _prepared_mirror(shape: Shape, mirror_input: np.ndarray) -> np.ndarray:
     """A mirror map in input numbering as a map between prepared-mesh vertices."""
-    return shape.index(mirror_input[shape.mesh.input_index])
+    return shape.mesh_index(mirror_input[shape.mesh.input_index], nearest=True)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -473,17 +451,17 @@ def _pair_task(job: dict) -> dict:
 
 
 def _pair_work(job: dict) -> list:
-    target = prepared_shape(job["target_path"], job["settings"].repair)
+    target = prepared_shape(job["target_path"], job["settings"].repair, job["settings"].config)
     records = _sparse_records(job, target) if job["methods"] else []
     if job.get("dense_methods"):
         records += _dense_records(job, target)
     return records
 
 
-def _sparse_records(job: dict, target: _Prepared) -> list:
+def _sparse_records(job: dict, target: Shape) -> list:
     from dataclasses import replace
 
-    from .pipeline import match_shapes
+    from ..method.pipeline import match_shapes
 
     settings: BenchSettings = job["settings"]
     src, tgt = job["source_rec"], job["target_rec"]
@@ -494,20 +472,20 @@ def _sparse_records(job: dict, target: _Prepared) -> list:
         sym_input = None if truth["mirror"] is None else np.asarray(truth["mirror"])[features]
     else:
         nearest = np.asarray(src["nearest_sample"], dtype=np.int64)
-        true_input = read_vts(truth["target_vts"], target.n_input)[nearest]
-        sym_input = None if truth["target_sym"] is None else read_vts(truth["target_sym"], target.n_input)[nearest]
-    true_t = target.index(true_input)
-    sym_t = None if sym_input is None else target.index(sym_input)
-    target_features = target.index(tgt["features"])
+        true_input = read_vts(truth["target_vts"], target.n_input_vertices)[nearest]
+        sym_input = None if truth["target_sym"] is None else read_vts(truth["target_sym"], target.n_input_vertices)[nearest]
+    true_t = target.mesh_index(true_input, nearest=True)
+    sym_t = None if sym_input is None else target.mesh_index(sym_input, nearest=True)
+    target_features = target.mesh_index(tgt["features"], nearest=True)
     fields: dict = {}
     records = []
     for method in job["methods"]:
         start = time.perf_counter()
         if method == "pyfm":
-            source = prepared_shape(job["source_path"], settings.repair)
+            source = prepared_shape(job["source_path"], settings.repair, settings.config)
             point_map = _pyfm_map(job, source, target)
             rows = np.arange(len(features))
-            matched = point_map[source.index(features)]
+            matched = point_map[source.mesh_index(features, nearest=True)]
             distance = np.full(len(rows), np.nan)
         else:
             # The same matcher as darcyan's (match_shapes with the run's config), other descriptors;
@@ -538,42 +516,40 @@ def _sparse_records(job: dict, target: _Prepared) -> list:
 DENSE_FAILURES = (DarcyanError, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError)
 
 
-def _dense_records(job: dict, target: _Prepared) -> list:
+def _dense_records(job: dict, target: Shape) -> list:
     """The dense maps of one pair (``job["dense_methods"]``), scored on the same sampled vertices."""
-    from dataclasses import replace
-
-    from .dense import UNMAPPED, DenseConfig, dense_map, evaluate_dense_maps, pyfm_own_map
-    from .evaluation import GroundTruth
-    from .pipeline import match_shapes
+    from ..dense.maps import UNMAPPED, DenseConfig, dense_map, pyfm_own_map
+    from ..eval.dense_scores import evaluate_dense_maps
+    from ..eval.metrics import GroundTruth
+    from ..method.pipeline import match_shapes
 
     settings: BenchSettings = job["settings"]
-    source = prepared_shape(job["source_path"], settings.repair)
+    source = prepared_shape(job["source_path"], settings.repair, settings.config)
     truth = job["truth"]
     if truth["kind"] == "identity":
         ground_truth = GroundTruth()
     else:
-        ground_truth = GroundTruth(read_vts(truth["source_vts"], source.n_input),
-                                   read_vts(truth["target_vts"], target.n_input))
+        ground_truth = GroundTruth(read_vts(truth["source_vts"], source.n_input_vertices),
+                                   read_vts(truth["target_vts"], target.n_input_vertices))
     maps, about = {}, {}
     for method in job["dense_methods"]:
         start = time.perf_counter()
         info: dict = {}
         try:
             if method == "darcyan":
-                # The cached descriptions, with the prepared meshes and solvers dense_map needs.
-                shape_1 = replace(job["source_rec"]["description"], mesh=source.mesh, solver=source.solver)
-                shape_2 = replace(job["target_rec"]["description"], mesh=target.mesh, solver=target.solver)
-                correspondence = match_shapes(shape_1, shape_2, settings.config)
+                # The cached descriptions' matches, on the prepared shapes (solvers, spectra).
+                correspondence = match_shapes(job["source_rec"]["description"], job["target_rec"]["description"],
+                                              settings.config)
                 info["matches"] = len(correspondence)
                 start = time.perf_counter()  # the dense stage only
-                result = dense_map(shape_1, shape_2, correspondence, DenseConfig())
+                result = dense_map(source, target, correspondence, DenseConfig())
                 info["landmarks"] = len(result.landmarks)
             else:
-                result = pyfm_own_map(source.mesh, target.mesh, source.n_input)
+                result = pyfm_own_map(source.mesh, target.mesh, source.n_input_vertices)
             maps[method] = result.target
             info["timings"] = {k: float(v) for k, v in result.timings.items()}
         except DENSE_FAILURES as exc:
-            maps[method] = np.full(source.n_input, UNMAPPED, dtype=np.int64)
+            maps[method] = np.full(source.n_input_vertices, UNMAPPED, dtype=np.int64)
             info["failed"] = str(exc) if isinstance(exc, DarcyanError) else f"{type(exc).__name__}: {exc}"
         about[method] = (time.perf_counter() - start, info)
     scores = evaluate_dense_maps(source.mesh, target.mesh, maps, ground_truth, settings.dense_samples,
@@ -596,14 +572,14 @@ def _kind(record: dict) -> str:
     return record.get("kind", "sparse")
 
 
-def _pyfm_map(job: dict, source: _Prepared, target: _Prepared) -> np.ndarray:
-    from . import baselines
+def _pyfm_map(job: dict, source: Shape, target: Shape) -> np.ndarray:
+    from ..eval import baselines
 
     cache = _cache_of(job)
     spectra = []
     for name, shape in ((job["source_path"], source), (job["target_path"], target)):
         arrays, _ = _cached(cache, (file_digest(name), "pyfm-spectrum", str(baselines.PYFM_SPECTRUM),
-                                    f"repair={job['settings'].repair}"),
+                                    f"repair={job['settings'].repair}", job["settings"].config.prepare_fingerprint()),
                             lambda: _pyfm_spectrum_arrays(shape.mesh))
         spectra.append((arrays["values"], arrays["vectors"]))
     return baselines.pyfm_point_map(source.mesh, target.mesh, spectra[0], spectra[1])
@@ -747,8 +723,6 @@ def run_bench(dataset_dir: str | os.PathLike, out: str | os.PathLike, methods=("
     method), scored on ``dense_samples`` source vertices drawn with seed 0 (see the module
     docstring); results under ``dense`` in results.json, and ``dense_curve.png``.
     """
-    from . import baselines
-
     wall = time.perf_counter()
     methods = tuple(dict.fromkeys(methods))
     unknown = [m for m in methods if m not in METHODS]
@@ -756,8 +730,8 @@ def run_bench(dataset_dir: str | os.PathLike, out: str | os.PathLike, methods=("
         raise DarcyanError(f"method must be among {', '.join(METHODS)}, got {', '.join(unknown) or 'none'}")
     if "pyfm" in methods:
         require("pyFM", "pyfm")
-    if laplacian not in baselines.LAPLACIANS:
-        raise DarcyanError(f"laplacian must be one of {', '.join(baselines.LAPLACIANS)}, got {laplacian!r}")
+    if laplacian not in lbo.LAPLACIANS:
+        raise DarcyanError(f"laplacian must be one of {', '.join(lbo.LAPLACIANS)}, got {laplacian!r}")
     if not 0 < threshold < 1:
         raise DarcyanError(f"threshold must be in (0, 1) (sqrt(area) units), got {threshold}")
     if jobs < 1:
@@ -1174,7 +1148,7 @@ def write_plots(results: dict, out: Path) -> list:
 def plot_rates(results: dict, path: Path) -> Path:
     """Bars per class (and the mean over classes): strict rate solid, with symmetric flips
     hatched on top, one colour per method (the paper's Fig. 8 side by side)."""
-    from . import style
+    from ..viz import style
 
     methods = results["methods"]
     classes = sorted({c for m in methods.values() for c in m["classes"]})
@@ -1202,7 +1176,7 @@ def plot_rates(results: dict, path: Path) -> Path:
 def plot_curves(results: dict, path: Path) -> Path:
     """Cumulative curve per method: share of matches with error <= tau (solid strict, dashed
     with symmetric flips)."""
-    from . import style
+    from ..viz import style
 
     taus = np.asarray(results["taus"])
     with style.context():
@@ -1226,7 +1200,7 @@ def plot_curves(results: dict, path: Path) -> Path:
 def plot_dense_curves(results: dict, path: Path) -> Path:
     """Cumulative curve of the dense maps, one line per method: share of the sampled source
     vertices with error <= tau, pooled over the pairs."""
-    from . import style
+    from ..viz import style
 
     taus = np.asarray(results["taus"])
     samples = ((results.get("settings") or {}).get("dense") or {}).get("samples")

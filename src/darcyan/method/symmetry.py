@@ -71,7 +71,7 @@ class OrientedSurface:
         areas: optional ``(n,)`` vertex areas; the test's points are drawn in proportion to
             them (uniformly over the surface), else uniformly over the vertices.
         profiles: optional ``(k, 2, l, a)`` angular curvature profiles around the feature points
-            (:func:`darcyan.descriptors.angular_profiles`), for :func:`handedness`.
+            (:func:`darcyan.method.descriptors.angular_profiles`), for :func:`handedness`.
     """
 
     points: np.ndarray
@@ -97,7 +97,7 @@ def curvature_signature(mesh, mean_curvature: np.ndarray) -> np.ndarray:
 
 def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2: OrientedSurface | None):
     """Among ``candidates`` ``[(score, Matches), ...]`` (best first, from
-    :func:`darcyan.matching.consistent_candidates`), the matches with the best score plus
+    :func:`darcyan.method.matching.consistent_candidates`), the matches with the best score plus
     ``ORIENTATION_WEIGHT * orientation_agreement * len(matches)`` plus ``HANDEDNESS_WEIGHT``
     times the :func:`handedness` of its matches (when both surfaces carry profiles): a mirror
     image, whole or partial, loses against the orientation-preserving matching it ties with.
@@ -134,7 +134,7 @@ def handedness(profiles_1: np.ndarray, profiles_2: np.ndarray, agreement: float 
 
     Args:
         profiles_1, profiles_2: ``(k1, 2, l, a)``, ``(k2, 2, l, a)`` from
-            :func:`darcyan.descriptors.angular_profiles` (angles counter-clockwise about the
+            :func:`darcyan.method.descriptors.angular_profiles` (angles counter-clockwise about the
             outward normal, from each grid's reference direction). Profiles of differently
             sized grids (descriptions made with other ``levels`` or ``radial_lines``) are no
             evidence: all zeros.

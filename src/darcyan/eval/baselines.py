@@ -21,21 +21,16 @@ darcyan's descriptor, so the benchmark compares descriptors, not set-ups.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
-import scipy.sparse as sp
 
-from .errors import ConfigError, MeshError, require
-from .mesh import Mesh
+from ..errors import ConfigError, require
+from ..geometry.mesh import Mesh
+from ..geometry.spectral import Spectrum
 
-SPECTRUM_SIZE = 100  # eigenpairs (the constant one included) behind HKS and WKS
-SHIFT = -1e-3  # shift-invert target: just below 0, so the smallest eigenvalues converge first
 SIGNATURE_SAMPLES = 100  # times (HKS) or energies (WKS) per signature
 HKS_DECAY = 4.0 * np.log(10.0)  # t_min/t_max: exp(-lambda t) drops to 1e-4 at lambda_max/lambda_1
 WKS_VARIANCE = 7.0  # sigma = WKS_VARIANCE * energy step (Aubry et al.)
 WKS_MARGIN = 2.0  # energies start and stop this many sigmas inside the log-spectrum
-LAPLACIANS = ("cotangent", "robust")
 SPECTRAL_METHODS = ("hks", "wks")
 
 # pyfmaps pipeline (the parameters of the package's README example).
@@ -46,50 +41,6 @@ PYFM_K = 35  # initial functional map size
 PYFM_FIT = {"w_descr": 1.0, "w_lap": 1e-2, "w_dcomm": 1e-1, "w_orient": 0.0}
 PYFM_ZOOMOUT_STEPS = 15  # ZoomOut iterations, one eigenfunction each (35 -> 50)
 
-
-@dataclass(frozen=True)
-class Spectrum:
-    """Laplace-Beltrami eigenpairs: ``values (k,)`` ascending (the first ~0), ``vectors (n, k)``
-    mass-orthonormal, ``mass (n,)`` lumped vertex areas; for a mesh of area 1."""
-
-    values: np.ndarray
-    vectors: np.ndarray
-    mass: np.ndarray
-
-
-def laplacian_operators(mesh: Mesh, laplacian: str = "cotangent") -> tuple[sp.csr_matrix, np.ndarray]:
-    """``(stiffness (n, n) positive semidefinite, lumped mass (n,))`` of ``mesh``."""
-    if laplacian == "cotangent":
-        from .curvature import cotangent_laplacian, mixed_voronoi_area
-
-        return (-cotangent_laplacian(mesh)).tocsr(), mixed_voronoi_area(mesh)
-    if laplacian == "robust":
-        robust_laplacian = require("robust_laplacian", "bench")
-        stiffness, mass = robust_laplacian.mesh_laplacian(np.asarray(mesh.vertices), np.asarray(mesh.faces))
-        return stiffness.tocsr(), np.asarray(mass.diagonal()).ravel()
-    raise ConfigError(f"laplacian must be one of {LAPLACIANS}, got {laplacian!r}")
-
-
-def laplace_beltrami_spectrum(mesh: Mesh, k: int = SPECTRUM_SIZE, laplacian: str = "cotangent",
-                              tol: float = 0.0) -> Spectrum:
-    """The ``k`` smallest eigenpairs of ``stiffness phi = lambda mass phi`` (shift-invert ``eigsh``,
-    relative accuracy ``tol`` of the eigenvalues; 0: machine precision).
-
-    Memory stays O(n k): one sparse factorization and the ``(n, k)`` eigenvectors.
-    """
-    from scipy.sparse.linalg import eigsh
-
-    stiffness, mass = laplacian_operators(mesh, laplacian)
-    k = min(k, mesh.n_vertices - 2)
-    if k < 3:
-        raise MeshError(mesh.name, "mesh too small for a Laplace-Beltrami spectrum")
-    mass = np.where(mass > 0, mass, mass[mass > 0].min(initial=1e-12))
-    try:
-        values, vectors = eigsh(stiffness, k=k, M=sp.diags(mass).tocsc(), sigma=SHIFT, which="LM", tol=tol)
-    except (RuntimeError, ValueError) as exc:
-        raise MeshError(mesh.name, f"Laplace-Beltrami eigenproblem failed ({exc})") from None
-    order = np.argsort(values)
-    return Spectrum(np.maximum(values[order], 0.0), vectors[:, order], mass)
 
 
 def _nonconstant(spectrum: Spectrum) -> tuple[np.ndarray, np.ndarray]:

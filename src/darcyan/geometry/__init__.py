@@ -1,0 +1,1 @@
+"""Geometry of triangle meshes: the mesh type, checks and repair, operators, geodesics, spectra."""

@@ -1,0 +1,150 @@
+"""The prepared shape: a mesh made ready for analysis once, its operators built once.
+
+:func:`prepare_shape` is the one way from an input :class:`~darcyan.geometry.mesh.Mesh` to what
+every part of darcyan works on (the method, dense maps, the benchmark's scoring and baselines,
+the pictures): checks and optional repair, the largest component, denoising of crumpled surfaces,
+scale normalization to area 1. The :class:`Shape` it returns is immutable; its operators
+(geodesic solver, normals, vertex areas, Laplacian, curvatures, spectra, coarse proxies) are
+computed on first use and kept, so two consumers of one shape never build one twice.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from ..config import DarcyanConfig
+from ..errors import MeshError
+from .curvature import Curvatures, principal_curvatures
+from .denoise import denoise_mesh
+from .geodesics import GeodesicSolver, vertex_normals
+from .mesh import Mesh, MeshWarning, Normalization, normalize_mesh
+from .operators import cotangent_laplacian, mixed_voronoi_area
+from .repair import prepare_mesh
+from .spectral import SHIFT, Spectrum, laplace_beltrami_spectrum
+
+
+@dataclass(frozen=True, eq=False)
+class Shape:
+    """A mesh prepared for analysis, and the operators built on it.
+
+    Attributes:
+        mesh: the prepared mesh: checked (and repaired if asked), largest component, denoised if
+            crumpled, centred and scaled to area 1 (lengths in sqrt(area) units of the input).
+            ``mesh.input_index (n,)`` gives each vertex's index in the input.
+        n_input_vertices: the input's vertex count, for range checks of results.
+        input_positions: ``(n_input, 3)`` the input's vertices in the prepared mesh's frame (the
+            same centring and scale), so that input vertices the preparation left out can be
+            placed.
+        normalization: the centring and scale applied to the input.
+        changes: the repairs applied (empty without ``repair``).
+        denoise_steps: Taubin smoothing steps applied (0: the surface was left as it was).
+    """
+
+    mesh: Mesh
+    n_input_vertices: int
+    input_positions: np.ndarray
+    normalization: Normalization
+    changes: tuple = ()
+    denoise_steps: int = 0
+    _memo: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def name(self) -> str:
+        return self.mesh.name
+
+    @property
+    def n_vertices(self) -> int:
+        return self.mesh.n_vertices
+
+    # -- operators, built on first use ---------------------------------------------------------
+
+    @cached_property
+    def solver(self) -> GeodesicSolver:
+        """Fast-marching geodesic distances on :attr:`mesh` (one solver, reused)."""
+        return GeodesicSolver(self.mesh)
+
+    @cached_property
+    def normals(self) -> np.ndarray:
+        """``(n, 3)`` unit vertex normals (outward)."""
+        return vertex_normals(self.mesh)
+
+    @cached_property
+    def vertex_areas(self) -> np.ndarray:
+        """``(n,)`` Meyer's mixed Voronoi areas (they sum to 1)."""
+        return mixed_voronoi_area(self.mesh)
+
+    @cached_property
+    def laplacian(self):
+        """``(n, n)`` cotangent Laplacian (scipy CSR, negative semidefinite)."""
+        return cotangent_laplacian(self.mesh)
+
+    def curvatures(self, smoothing: int = 0) -> Curvatures:
+        """Meyer principal curvatures after ``smoothing`` one-ring averaging iterations."""
+        return self._once(("curvatures", smoothing), lambda: principal_curvatures(self.mesh, smoothing))
+
+    def spectrum(self, k: int, tol: float = 0.0, shift: float = SHIFT, laplacian: str = "cotangent") -> Spectrum:
+        """The ``k`` smallest Laplace-Beltrami eigenpairs (seeded: the same bytes every run)."""
+        return self._once(("spectrum", k, tol, shift, laplacian),
+                          lambda: laplace_beltrami_spectrum(self.mesh, k, laplacian, tol, shift))
+
+    def proxy(self, vertices: int):
+        """A :class:`~darcyan.geometry.proxy.CoarseProxy` of about ``vertices`` vertices, or
+        ``None`` when the mesh has fewer than twice as many (then work on the mesh itself)."""
+        from .proxy import coarse_proxy
+
+        return self._once(("proxy", vertices), lambda: coarse_proxy(self.mesh, vertices))
+
+    def _once(self, key: tuple, compute):
+        if key not in self._memo:
+            self._memo[key] = compute()
+        return self._memo[key]
+
+    # -- numbering ----------------------------------------------------------------------------
+
+    def mesh_index(self, input_vertices, nearest: bool = False) -> np.ndarray:
+        """``(k,) int64`` indices into :attr:`mesh` of vertices given in the input's numbering.
+
+        A vertex the preparation left out (a small component, an unreferenced vertex) is -1, or
+        with ``nearest`` the prepared vertex nearest its position. An index outside the input's
+        range is a :class:`~darcyan.errors.MeshError`.
+        """
+        input_vertices = np.asarray(input_vertices, dtype=np.int64).reshape(-1)
+        bad = (input_vertices < 0) | (input_vertices >= self.n_input_vertices)
+        if bad.any():
+            raise MeshError(self.name, f"vertex {int(input_vertices[bad][0])} out of range "
+                                       f"0..{self.n_input_vertices - 1}")
+        out = self._inverse_index[input_vertices]
+        missing = out < 0
+        if nearest and missing.any():
+            from scipy.spatial import cKDTree
+
+            out[missing] = cKDTree(self.mesh.vertices).query(self.input_positions[input_vertices[missing]])[1]
+        return out
+
+    @cached_property
+    def _inverse_index(self) -> np.ndarray:
+        inverse = np.full(self.n_input_vertices, -1, dtype=np.int64)
+        inverse[self.mesh.input_index[::-1]] = np.arange(self.mesh.n_vertices)[::-1]  # first copy wins
+        return inverse
+
+
+def prepare_shape(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bool = False) -> Shape:
+    """Prepare ``mesh`` (as read from a file) for analysis: see the module docstring.
+
+    Warns (:class:`MeshWarning`) about what it leaves out or changes; raises
+    :class:`~darcyan.errors.MeshError` for input it cannot use.
+    """
+    prepared, changes = prepare_mesh(mesh, repair=repair)
+    prepared, steps, area_ratio = denoise_mesh(prepared, config.denoise_area_ratio)
+    if steps:
+        warnings.warn(f"{mesh.name}: the surface is crumpled at the scale of its edges (its area is "
+                      f"{area_ratio:.2f} times that of a smoothed copy: vertex noise?); analysed after "
+                      f"{steps} Taubin smoothing steps", MeshWarning, stacklevel=2)
+    normalized, normalization = normalize_mesh(prepared)
+    positions = (mesh.vertices - normalization.centre) * normalization.scale
+    positions.flags.writeable = False
+    return Shape(normalized, mesh.n_vertices, positions, normalization, tuple(changes), steps)

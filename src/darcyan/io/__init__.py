@@ -1,0 +1,1 @@
+"""Files: mesh readers and writers, the on-disk cache."""

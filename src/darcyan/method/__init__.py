@@ -1,0 +1,1 @@
+"""The Darcyan method: curvature, feature points, grids, descriptors, matching, mirror test, pipeline."""

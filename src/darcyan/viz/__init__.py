@@ -1,0 +1,1 @@
+"""Pictures: scenes, static rendering, interactive HTML, plot style."""
