@@ -19,6 +19,7 @@ the per-shape cache ($DARCYAN_CACHE).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from collections import defaultdict
 from pathlib import Path
@@ -56,33 +57,29 @@ def main(argv=None) -> int:
                 described[name] = describe_shape(dataset.shapes[name], config, cache=cache)
         d1, d2 = described[source], described[target]
         candidates = consistent_candidates(d1.descriptors, d2.descriptors, d1.feature_geodesics,
-                                           d2.feature_geodesics)[:symmetry.CANDIDATES_TESTED]
-        points = symmetry.mirror_test_points(d1.surface, d2.surface)
-        base = [score + symmetry.ORIENTATION_WEIGHT * len(matches) * symmetry.orientation_agreement(
-                    d1.surface, d2.surface, matches.source, matches.target, points=points)
-                for score, matches in candidates]
-        cases.append((shape_class(source), d1, d2, candidates, base, oracle(root, source, target, d1, d2)))
+                                           d2.feature_geodesics, config.consistency)
+        cases.append((shape_class(source), d1, d2, candidates, oracle(root, source, target, d1, d2)))
         print(f"\r{number}/{len(pairs)} pairs", end="", file=sys.stderr, flush=True)
     print(file=sys.stderr)
     classes = sorted({c[0] for c in cases})
     print("| weight | agreement | " + " | ".join(classes) + " | all |")
     print("| ---: | ---: | " + " | ".join("---:" for _ in classes) + " | ---: |")
     for agreement in args.agreements:
-        hands = [symmetry.handedness(d1.surface.profiles, d2.surface.profiles, agreement) for _, d1, d2, *_ in cases]
         for weight in args.weights:
             if weight == 0 and agreement != args.agreements[0]:
                 continue  # the same row for every agreement
+            # the method's own choice (mirror test plus handedness) with these two settings
+            test = dataclasses.replace(config.mirror, handedness_weight=weight, profile_agreement=agreement)
             won, count, right, kept = (defaultdict(int) for _ in range(4))
-            for (cls, d1, d2, candidates, base, truth), hand in zip(cases, hands):
-                totals = [b + weight * hand[m.source, m.target].sum() for b, (_, m) in zip(base, candidates)]
-                chosen = candidates[int(np.argmax(totals))][1]
+            for cls, d1, d2, candidates, truth in cases:
+                chosen = symmetry.choose_orientation(candidates, d1.surface, d2.surface, test)
                 chosen = drop_dissimilar(chosen, d1.descriptors, d2.descriptors, config.max_match_distance)
                 good = truth[chosen.source] == chosen.target
                 won[cls] += bool(good.all())
                 count[cls] += 1
                 right[cls] += int(good.sum())
                 kept[cls] += len(good)
-            default = weight == symmetry.HANDEDNESS_WEIGHT and agreement == symmetry.PROFILE_AGREEMENT
+            default = weight == config.mirror.handedness_weight and agreement == config.mirror.profile_agreement
             cells = [f"{won[c]}/{count[c]} ({right[c] / max(kept[c], 1):.3f})" for c in classes]
             total = f"{sum(won.values())}/{len(cases)} ({sum(right.values()) / max(sum(kept.values()), 1):.3f})"
             label = "-" if weight == 0 else f"{agreement:g}"

@@ -16,6 +16,7 @@ Descriptions come from the per-shape cache ($DARCYAN_CACHE), so a second run is 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from collections import defaultdict
 from pathlib import Path
@@ -72,18 +73,15 @@ def main(argv=None) -> int:
     classes = sorted({c[0] for c in cases})
     print("| samples | neighbours | signature weight | " + " | ".join(classes) + " | all |")
     print("| ---: | ---: | ---: | " + " | ".join("---:" for _ in classes) + " | ---: |")
-    default = (symmetry.SAMPLES, symmetry.NEIGHBOURS, symmetry.SIGNATURE_WEIGHT)
+    defaults = config.mirror
+    default = (defaults.samples, defaults.neighbours, defaults.signature_weight)
     for samples, neighbours, weight in settings:
+        # the mirror test alone (no handedness), through the method's own choice
+        test = dataclasses.replace(defaults, samples=samples, neighbours=neighbours, signature_weight=weight,
+                                   handedness_weight=0.0)
         won, count = defaultdict(int), defaultdict(int)
         for cls, d1, d2, candidates, truth in cases:
-            best, best_total = None, -np.inf
-            points = symmetry.mirror_test_points(d1.surface, d2.surface, samples=samples, neighbours=neighbours)
-            for score, matches in candidates[:symmetry.CANDIDATES_TESTED]:
-                agreement = symmetry.orientation_agreement(d1.surface, d2.surface, matches.source, matches.target,
-                                                           signature_weight=weight, points=points)
-                total = score + symmetry.ORIENTATION_WEIGHT * agreement * len(matches)
-                if total > best_total:
-                    best, best_total = matches, total
+            best = symmetry.choose_orientation(candidates, d1.surface, d2.surface, test)
             won[cls] += bool(np.all(truth[best.source] == best.target))
             count[cls] += 1
         mark = " (default)" if (samples, neighbours, weight) == default else ""

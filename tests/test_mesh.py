@@ -8,7 +8,8 @@ from conftest import noisy_copy
 
 from darcyan import MeshError, MeshWarning
 from darcyan.geometry import synthetic
-from darcyan.geometry.denoise import DENOISE_BLOCK, denoise_mesh, surface_roughness, taubin_smooth
+from darcyan.config import Denoising
+from darcyan.geometry.denoise import denoise_mesh, surface_roughness, taubin_smooth
 from darcyan.geometry.mesh import Mesh, normalize_mesh
 from darcyan.geometry.repair import prepare_mesh
 from darcyan.io.mesh_files import load_mesh, save_mesh
@@ -156,13 +157,13 @@ def test_clean_meshes_are_not_denoised(sphere, figure_poses):
     for mesh in (sphere, *figure_poses):
         same, steps, _ = denoise_mesh(mesh, 1.1)
         assert steps == 0 and same is mesh
-        assert mesh.area() / taubin_smooth(mesh, DENOISE_BLOCK).area() < 1.04
+        assert mesh.area() / taubin_smooth(mesh, Denoising().block).area() < 1.04
     # Coarse clean meshes lose more than 10% of their area to smoothing, but are not rough.
     for subdivisions in (2, 3):
         coarse = synthetic.figure(1, subdivisions=subdivisions)
         same, steps, _ = denoise_mesh(coarse, 1.1)
         assert steps == 0 and same is coarse
-        assert coarse.area() / taubin_smooth(coarse, DENOISE_BLOCK).area() > 1.1
+        assert coarse.area() / taubin_smooth(coarse, Denoising().block).area() > 1.1
         assert surface_roughness(coarse) < 1.0 < surface_roughness(noisy_copy(coarse, 0.005))
 
 

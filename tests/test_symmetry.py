@@ -1,5 +1,7 @@
 """Telling a correspondence from its mirror image (darcyan.method.symmetry)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from conftest import correct_matches, random_rotation
@@ -96,19 +98,19 @@ def test_humans_keep_left_and_right(tosca, tmp_path):
 
 
 @pytest.mark.data
-def test_handedness_undoes_hand_and_foot_swaps_the_mirror_test_missed(tosca, tmp_path, monkeypatch):
+def test_handedness_undoes_hand_and_foot_swaps_the_mirror_test_missed(tosca, tmp_path):
     """tosca-5k pairs whose hands or feet go to the other side without handedness (3 of 5 right);
     handedness sets them right. (Of the 422 michael and david pairs of tosca-5k, 4 change so.)"""
     from darcyan.io.cache import ShapeCache
-    from darcyan.method import symmetry
 
     cache = ShapeCache(tmp_path / "cache")
     pairs = {("michael11", "michael19"): 3, ("michael19", "michael17"): 3}
     for a, b in pairs:
         assert correct_matches(tosca / "tosca-5k", a, b, cache) == (5, 5), (a, b)
-    monkeypatch.setattr(symmetry, "HANDEDNESS_WEIGHT", 0.0)
+    config = DarcyanConfig()
+    without = config.replace(mirror=dataclasses.replace(config.mirror, handedness_weight=0.0))
     for (a, b), right in pairs.items():
-        assert correct_matches(tosca / "tosca-5k", a, b, cache) == (right, 5), (a, b)
+        assert correct_matches(tosca / "tosca-5k", a, b, cache, without) == (right, 5), (a, b)
 
 
 def test_true_matching_ranked_below_the_eighth_candidate_is_still_found(tosca, tmp_path):

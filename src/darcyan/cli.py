@@ -53,6 +53,9 @@ def _add_config_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--paper", action="store_true",
                        help="the paper's method as published: plain AGD maxima (--agd-smoothing 0 --extremity-radius "
                             "0.15 --tip-gain 0), no denoising and nearest-descriptor matching; options given beside it still apply")
+    group.add_argument("--config", metavar="JSON",
+                       help="a JSON file of settings to change (method parameters by name, sections such as "
+                            "{\"mirror\": {\"samples\": 400}} in part; see darcyan.DarcyanConfig); options given beside it still apply")
     parser.add_argument("--repair", action="store_true", help="drop duplicate/degenerate faces and unreferenced vertices instead of refusing them")
     parser.add_argument("--no-cache", action="store_true", help="do not read or write the per-shape cache ($DARCYAN_CACHE)")
 
@@ -60,10 +63,26 @@ def _add_config_options(parser: argparse.ArgumentParser) -> None:
 def _config(args: argparse.Namespace) -> DarcyanConfig:
     """The defaults (or the paper's setup with ``--paper``), changed by the options given."""
     base = DarcyanConfig.paper() if getattr(args, "paper", False) else DarcyanConfig()
+    if getattr(args, "config", None):
+        base = base.updated(_read_json(args.config), args.config)
     values = {name: getattr(args, name) for name in CONFIG_HELP if getattr(args, name, None) is not None}
     if getattr(args, "matching", None):
         values["matching"] = args.matching
     return base.replace(**values)
+
+
+def _read_json(path: str) -> dict:
+    import json
+
+    try:
+        data = json.loads(Path(path).read_text())
+    except FileNotFoundError:
+        raise DarcyanError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise DarcyanError(f"{path}: not a JSON file ({exc})") from None
+    if not isinstance(data, dict):
+        raise DarcyanError(f"{path}: expected a JSON object of settings")
+    return data
 
 
 def _cache(args: argparse.Namespace) -> ShapeCache | None:

@@ -17,8 +17,185 @@ from dataclasses import dataclass
 from .errors import ConfigError
 
 MATCHING_MODES = ("consistent", "nearest", "one-to-one")
-# The fields that change how a mesh is prepared (checks, repair, denoising, normalization).
-PREPARE_FIELDS = ("denoise_area_ratio",)
+
+
+# Which stage a setting changes: "prepare" (the prepared mesh), "describe" (a shape's
+# description, cached on disk) or "match" (matching two descriptions). Cache keys are derived
+# from the fields of the stages a result depends on (see DarcyanConfig.fingerprint).
+PREPARE, DESCRIBE, MATCH = "prepare", "describe", "match"
+
+
+def _stage(default, stage: str):
+    return dataclasses.field(default=default, metadata={"stage": stage})
+
+
+@dataclass(frozen=True)
+class Denoising:
+    """How a crumpled surface is smoothed (see :func:`darcyan.geometry.denoise.denoise_mesh`);
+    ``DarcyanConfig.denoise_area_ratio`` decides whether it is.
+
+    Attributes:
+        block: Taubin steps between two area measurements.
+        max_steps: at most this many steps in all.
+        settled: a block that shrinks the area by less than this factor ends the smoothing.
+        noise_roughness: the surface roughness (median |L L x| / median |L x|, umbrella L) above
+            which a surface counts as noisy: white vertex noise measures ~1.25, clean meshes
+            0.4-0.9 (regular) up to 1.05 (TOSCA's remeshed 5k set).
+        taubin_lambda, taubin_mu: Taubin's lambda|mu pair (pass-band ~0.1): smooths without the
+            shrinkage of plain Laplacian steps.
+    """
+
+    block: int = _stage(10, PREPARE)
+    max_steps: int = _stage(200, PREPARE)
+    settled: float = _stage(1.02, PREPARE)
+    noise_roughness: float = _stage(1.15, PREPARE)
+    taubin_lambda: float = _stage(0.5, PREPARE)
+    taubin_mu: float = _stage(-0.53, PREPARE)
+
+    def __post_init__(self) -> None:
+        _check(self, ("block", "max_steps"), lambda v: isinstance(v, int) and v >= 1, "a positive integer")
+        _check(self, ("settled", "noise_roughness"), lambda v: _number(v) and v >= 1, "a factor >= 1")
+        _check(self, ("taubin_lambda",), lambda v: _number(v) and 0 < v < 1, "in (0, 1)")
+        _check(self, ("taubin_mu",), lambda v: _number(v) and -1 < v < 0, "in (-1, 0)")
+
+
+@dataclass(frozen=True)
+class HeatKernel:
+    """The heat kernel that moves feature points to the sharpest tip of their extremity, and the
+    heat diffusion behind the AGD smoothing and the mirror test's signature.
+
+    Attributes:
+        vertices: the kernel is computed on the AGD's proxy, or on a copy of at least this many
+            vertices if the proxy is coarser: on 1500 vertices (tosca-5k michael) it moved a
+            hand in 2 of 8 poses and missed the head in another, which 5000 do not.
+        decay: eigenpairs are kept while ``exp(-lambda t)`` exceeds ``exp(-decay)`` (each one
+            beyond weighs less than 2.5e-3 at decay 6; on a sphere the ones left out add 0.2%).
+        tolerance: the eigensolver's relative accuracy: 1e-2 changes the kernel by 1e-5
+            (tosca-5k cat0) and saves a third of its time.
+        diffusion_steps: backward-Euler steps of a heat diffusion: one step is a wide,
+            heavy-tailed kernel; a few approach a Gaussian at the cost of one factorization.
+    """
+
+    vertices: int = _stage(5000, DESCRIBE)
+    decay: float = _stage(6.0, DESCRIBE)
+    tolerance: float = _stage(1e-2, DESCRIBE)
+    diffusion_steps: int = _stage(4, DESCRIBE)
+
+    def __post_init__(self) -> None:
+        _check(self, ("vertices", "diffusion_steps"), lambda v: isinstance(v, int) and v >= 1, "a positive integer")
+        _check(self, ("decay",), lambda v: _number(v) and v > 0, "positive")
+        _check(self, ("tolerance",), lambda v: _number(v) and 0 <= v < 1, "in [0, 1)")
+
+
+@dataclass(frozen=True)
+class GeodesicMargins:
+    """Where exact geodesics are computed around a feature point.
+
+    Attributes:
+        ball: the geodesic ball around a feature point reaches this share beyond the radius
+            asked for, so that fast marching inside it is exact up to that radius.
+        trace: radial geodesics are traced this many times the outermost level radius, so
+            that they cross every level curve even where the surface bends.
+    """
+
+    ball: float = _stage(0.3, DESCRIBE)
+    trace: float = _stage(1.5, DESCRIBE)
+
+    def __post_init__(self) -> None:
+        _check(self, ("ball",), lambda v: _number(v) and 0 <= v < 10, "a share >= 0")
+        _check(self, ("trace",), lambda v: _number(v) and 1 <= v < 10, "a factor >= 1")
+
+
+@dataclass(frozen=True)
+class Consistency:
+    """Weights of :func:`darcyan.method.matching.consistent_candidates`' score; all terms are
+    dimensionless. Chosen on tosca-5k (``docs/parameters.md``): geodesic distances between true
+    corresponding feature points change by 4% (median) to 28% (99th percentile) between TOSCA
+    poses, hence the wide tolerance.
+
+    Attributes:
+        geodesic_tolerance: relative change of a geodesic distance still counted as kept.
+        geodesic: weight of one pair of matches keeping (+) or breaking (-) its distance.
+        beam_width: matchings kept at each step of the beam search.
+    """
+
+    geodesic_tolerance: float = _stage(0.3, MATCH)
+    geodesic: float = _stage(0.5, MATCH)
+    beam_width: int = _stage(128, MATCH)
+
+    def __post_init__(self) -> None:
+        _check(self, ("geodesic_tolerance",), lambda v: _number(v) and v > 0, "positive")
+        _check(self, ("geodesic",), lambda v: _number(v) and v >= 0, ">= 0")
+        _check(self, ("beam_width",), lambda v: isinstance(v, int) and v >= 1, "a positive integer")
+
+
+@dataclass(frozen=True)
+class MirrorTest:
+    """The test that tells a matching from its mirror image (:mod:`darcyan.method.symmetry`).
+
+    Attributes:
+        samples: sample points on the source; their spacing sets the size of the test triangles
+            (area 1: about 1/sqrt(samples) = 0.035 apart). Each makes a triangle with every two
+            of its ``neighbours`` nearest samples, so most triangles are several spacings wide,
+            larger than the coarse map's error (tosca-5k: with 200 samples and one triangle per
+            sample 165 of the 203 test pairs got their true matching; with these, 190).
+        neighbours: see ``samples``.
+        target_points: images are looked for among at most this many target vertices.
+        min_sine: a triangle votes only when |sin| of its corner is at least this on both shapes.
+        signature_lengths: diffusion lengths (sqrt(area)) of the mean curvature making up the
+            point signature (computed with the description).
+        signature_weight: the signature's weight against landmark distances in the coarse map.
+        candidates: candidate matchings (best first) whose orientation is tested (16 rather
+            than 8: on tosca-hires the dog's true matching was sometimes ranked below 8).
+        orientation_weight: the score of full orientation agreement, per match.
+        profile_levels: the innermost level curves whose angular curvature profile gives a tip's
+            handedness (computed with the description).
+        profile_agreement: two profiles count only as far as they agree, in one turning sense,
+            better than this times unrelated profiles would.
+        handedness_weight: the weight of handedness, per match.
+        seed: the seed of the sample points.
+    """
+
+    samples: int = _stage(800, MATCH)
+    neighbours: int = _stage(6, MATCH)
+    target_points: int = _stage(10_000, MATCH)
+    min_sine: float = _stage(0.3, MATCH)
+    signature_lengths: tuple = _stage((0.05, 0.1, 0.2), DESCRIBE)
+    signature_weight: float = _stage(0.9, MATCH)
+    candidates: int = _stage(16, MATCH)
+    orientation_weight: float = _stage(1.0, MATCH)
+    profile_levels: int = _stage(2, DESCRIBE)
+    profile_agreement: float = _stage(0.8, MATCH)
+    handedness_weight: float = _stage(2.0, MATCH)
+    seed: int = _stage(0, MATCH)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "signature_lengths", tuple(float(x) for x in self.signature_lengths))
+        _check(self, ("samples", "neighbours", "target_points", "candidates", "profile_levels"),
+               lambda v: isinstance(v, int) and v >= 1, "a positive integer")
+        _check(self, ("min_sine",), lambda v: _number(v) and 0 <= v < 1, "in [0, 1)")
+        _check(self, ("signature_weight", "orientation_weight", "handedness_weight"),
+               lambda v: _number(v) and v >= 0, ">= 0")
+        _check(self, ("profile_agreement",), lambda v: isinstance(v, (int, float)) and v > 0,
+               "positive (inf: trust every profile)")
+        _check(self, ("seed",), lambda v: isinstance(v, int) and v >= 0, "an integer >= 0")
+        if not self.signature_lengths or min(self.signature_lengths) <= 0:
+            raise ConfigError(f"config: mirror.signature_lengths must be positive lengths, got {self.signature_lengths!r}")
+
+
+def _number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _check(section, names, ok, what: str) -> None:
+    for name in names:
+        value = getattr(section, name)
+        if not ok(value):
+            raise ConfigError(f"config: {type(section).__name__}.{name} must be {what}, got {value!r}")
+
+
+SECTIONS = {"denoising": Denoising, "heat": HeatKernel, "margins": GeodesicMargins, "consistency": Consistency,
+            "mirror": MirrorTest}
 
 
 @dataclass(frozen=True)
@@ -72,25 +249,40 @@ class DarcyanConfig:
             shapes differ more than a typical pair of unrelated extremities, and only the layout
             kept it (mostly a feature point with no counterpart on the other shape, such as a
             cat's ear against its nose); 0 keeps every match.
+
+    Sections (typed, each documented in its class), for settings below the method's parameters:
+        denoising: :class:`Denoising`, how a crumpled surface is smoothed.
+        heat: :class:`HeatKernel`, the heat kernel of the sharpest tips and the heat diffusions.
+        margins: :class:`GeodesicMargins`, how far exact geodesics reach around a feature point.
+        consistency: :class:`Consistency`, the weights of the layout-keeping matcher.
+        mirror: :class:`MirrorTest`, the test that rejects mirror-image matchings.
+
+    Every field changes one stage: preparing a mesh, describing a shape or matching two;
+    :meth:`fingerprint` derives cache keys from the fields of the stages a result depends on.
     """
 
-    levels: int = 6
-    radial_lines: int = 16
-    radius: float = 0.12
-    interpolation: int = 2
-    curvature_smoothing: int = 4
-    denoise_area_ratio: float = 1.1
-    agd_sources: int = 24
-    agd_smoothing: float = 0.14
-    proxy_vertices: int = 6000
-    extremity_radius: float = 0.25
-    min_agd_quantile: float = 0.3
-    tip_gain: float = 1.1
-    tip_radius: float = 0.35
-    tip_agd_drop: float = 0.03
-    max_features: int = 0
-    matching: str = "consistent"
-    max_match_distance: float = 1.5
+    levels: int = _stage(6, DESCRIBE)
+    radial_lines: int = _stage(16, DESCRIBE)
+    radius: float = _stage(0.12, DESCRIBE)
+    interpolation: int = _stage(2, DESCRIBE)
+    curvature_smoothing: int = _stage(4, DESCRIBE)
+    denoise_area_ratio: float = _stage(1.1, PREPARE)
+    agd_sources: int = _stage(24, DESCRIBE)
+    agd_smoothing: float = _stage(0.14, DESCRIBE)
+    proxy_vertices: int = _stage(6000, DESCRIBE)
+    extremity_radius: float = _stage(0.25, DESCRIBE)
+    min_agd_quantile: float = _stage(0.3, DESCRIBE)
+    tip_gain: float = _stage(1.1, DESCRIBE)
+    tip_radius: float = _stage(0.35, DESCRIBE)
+    tip_agd_drop: float = _stage(0.03, DESCRIBE)
+    max_features: int = _stage(0, DESCRIBE)
+    matching: str = _stage("consistent", MATCH)
+    max_match_distance: float = _stage(1.5, MATCH)
+    denoising: Denoising = _stage(Denoising(), PREPARE)
+    heat: HeatKernel = _stage(HeatKernel(), DESCRIBE)
+    margins: GeodesicMargins = _stage(GeodesicMargins(), DESCRIBE)
+    consistency: Consistency = _stage(Consistency(), MATCH)
+    mirror: MirrorTest = _stage(MirrorTest(), MATCH)
 
     def __post_init__(self) -> None:
         positive_ints = ("levels", "radial_lines", "interpolation", "agd_sources")
@@ -123,24 +315,58 @@ class DarcyanConfig:
             raise ConfigError(f"config: max_match_distance must be >= 0 (0: off), got {self.max_match_distance!r}")
         if self.matching not in MATCHING_MODES:
             raise ConfigError(f"config: matching must be one of {MATCHING_MODES}, got {self.matching!r}")
+        for name, kind in SECTIONS.items():
+            value = getattr(self, name)
+            if isinstance(value, dict):  # as read back from JSON
+                value = kind(**value)
+                object.__setattr__(self, name, value)
+            if not isinstance(value, kind):
+                raise ConfigError(f"config: {name} must be a {kind.__name__}, got {value!r}")
 
     def replace(self, **changes) -> "DarcyanConfig":
         """A copy with some fields changed (validated again)."""
         return dataclasses.replace(self, **changes)
 
+    def updated(self, changes: dict, source: str = "config") -> "DarcyanConfig":
+        """A copy with ``changes`` applied: method parameters by name, sections as dicts of the
+        fields to change (``{"mirror": {"samples": 400}}``), as in a ``--config`` JSON file.
+        An unknown name is a :class:`ConfigError` naming ``source``."""
+        flat, nested = {}, {}
+        names = {f.name for f in dataclasses.fields(self)}
+        for name, value in changes.items():
+            if name not in names:
+                raise ConfigError(f"{source}: unknown setting {name!r} (known: {', '.join(sorted(names))})")
+            if name in SECTIONS and isinstance(value, dict):
+                section = getattr(self, name)
+                known = {f.name for f in dataclasses.fields(section)}
+                unknown = sorted(set(value) - known)
+                if unknown:
+                    raise ConfigError(f"{source}: unknown setting {name}.{unknown[0]} (known: {', '.join(sorted(known))})")
+                nested[name] = dataclasses.replace(section, **value)
+            else:
+                flat[name] = value
+        return self.replace(**flat, **nested)
+
     def as_dict(self) -> dict:
+        """Every field, sections as nested dicts (JSON-ready; ``DarcyanConfig(**d)`` reads it back)."""
         return dataclasses.asdict(self)
 
-    def fingerprint(self, *fields: str) -> str:
-        """A short hash of the named fields (all when none named), for cache keys."""
-        values = self.as_dict()
-        chosen = {k: values[k] for k in (fields or values)}
+    def fingerprint(self, *stages: str) -> str:
+        """A short hash of every field that changes the given stages (all fields when none are
+        named): the cache key of a result that depends on them. Derived from the fields'
+        declared stage, sections included, so a new setting can never be left out of a key."""
+        chosen = {name: value for name, value in _staged_fields(self)
+                  if not stages or _stage_of(self, name) in stages}
         return hashlib.sha1(json.dumps(chosen, sort_keys=True).encode()).hexdigest()[:16]
 
     def prepare_fingerprint(self) -> str:
-        """:meth:`fingerprint` of the fields that change how a mesh is prepared
+        """:meth:`fingerprint` of what changes how a mesh is prepared
         (:func:`darcyan.geometry.shape.prepare_shape`)."""
-        return self.fingerprint(*PREPARE_FIELDS)
+        return self.fingerprint(PREPARE)
+
+    def describe_fingerprint(self) -> str:
+        """:meth:`fingerprint` of what changes a shape's description (its preparation included)."""
+        return self.fingerprint(PREPARE, DESCRIBE)
 
     @classmethod
     def paper(cls, **changes) -> "DarcyanConfig":
@@ -154,3 +380,24 @@ class DarcyanConfig:
     def level_radii(self) -> "list[float]":
         """lambda_1..lambda_n: the geodesic radii of the level curves."""
         return [self.radius * (k + 1) / self.levels for k in range(self.levels)]
+
+
+def _staged_fields(config) -> list:
+    """``[(dotted name, value), ...]`` of every leaf field of ``config``, sections flattened."""
+    out = []
+    for f in dataclasses.fields(config):
+        value = getattr(config, f.name)
+        if dataclasses.is_dataclass(value):
+            out += [(f"{f.name}.{name}", v) for name, v in _staged_fields(value)]
+        else:
+            out.append((f.name, list(value) if isinstance(value, tuple) else value))
+    return out
+
+
+def _stage_of(config, dotted: str) -> str:
+    """The stage declared for the field ``dotted`` (``"mirror.samples"``) of ``config``."""
+    owner = config
+    *path, last = dotted.split(".")
+    for name in path:
+        owner = getattr(owner, name)
+    return {f.name: f for f in dataclasses.fields(owner)}[last].metadata["stage"]

@@ -68,14 +68,13 @@ from ..eval.metrics import (
 )
 from ..geometry import spectral as lbo
 from ..geometry.shape import Shape
-from ..io.cache import ShapeCache, file_digest
+from ..io.cache import ShapeCache, code_digest, file_digest
 
 METHODS = ("darcyan", "hks", "wks", "pyfm")
 DENSE_METHODS = ("darcyan", "pyfm")  # dense maps of --dense (pyfm only when it is among the methods)
 DENSE = "dense"  # the "kind" of a dense record in the journal (sparse records have no kind)
 MESH_SUFFIXES = (".off", ".ply", ".obj")
 TRUTH_FOLDER = "corres"
-BENCH_CACHE_FORMAT = "bench-1"  # bump when what the bench caches per shape changes
 MIRROR_MAX_RESIDUAL = 0.005  # a pose whose best reflection leaves more (sqrt(area) units) is not symmetric
 MIRROR_VALIDATION_SAMPLES = 200  # .sym.vts samples compared with a derived mirror map
 WRITE_INTERVAL = 2.0  # seconds between rewrites of the summaries while pairs finish
@@ -276,7 +275,7 @@ def _cache_of(task: dict) -> ShapeCache | None:
 def _cached(cache: ShapeCache | None, key_parts: tuple, compute):
     """``compute()`` (a dict of arrays) through ``cache``; returns (arrays, computed?)."""
     if cache is not None:
-        key = cache.key(BENCH_CACHE_FORMAT, *key_parts)
+        key = cache.key("bench", f"code={code_digest()}", *key_parts)
         stored = cache.load(key)
         if stored is not None:
             return stored, False

@@ -6,23 +6,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..config import Denoising
 from .mesh import Mesh, vertex_adjacency
 
 if TYPE_CHECKING:
     import scipy.sparse as sp
-
-# Denoising
-
-# Taubin's lambda|mu pair (pass-band ~0.1): smooths without the shrinkage of plain Laplacian steps.
-TAUBIN_LAMBDA, TAUBIN_MU = 0.5, -0.53
-DENOISE_BLOCK = 10  # Taubin steps between two area measurements
-DENOISE_MAX_STEPS = 200
-DENOISE_SETTLED = 1.02  # a block that shrinks the area by less than this factor ends the smoothing
-# roughness (see surface_roughness) of white vertex noise is ~1.25; clean meshes measure 0.4-0.9
-# (regular ones) up to 1.05 (TOSCA's remeshed 5k set). Coarse clean meshes also lose area to
-# smoothing (10% and more below ~1000 vertices): both tests must agree before a mesh is smoothed.
-NOISE_ROUGHNESS = 1.15
-
 
 def _umbrella(mesh: Mesh) -> sp.csr_matrix:
     """The uniform-weight one-ring averaging operator (rows sum to 1)."""
@@ -47,28 +35,29 @@ def surface_roughness(mesh: Mesh, average: sp.csr_matrix | None = None) -> float
     return float(np.median(np.linalg.norm(llx, axis=1))) / first if first > 0 else 0.0
 
 
-def taubin_smooth(mesh: Mesh, steps: int, average: sp.csr_matrix | None = None) -> Mesh:
+def taubin_smooth(mesh: Mesh, steps: int, average: sp.csr_matrix | None = None,
+                  denoising: Denoising = Denoising()) -> Mesh:
     """``steps`` Taubin lambda|mu smoothing steps with uniform one-ring weights; faces, vertex
     numbering and the map back to the input are kept. ``average``: the umbrella operator, if built
     (it depends on the connectivity only)."""
     average = _umbrella(mesh) if average is None else average
     v = mesh.vertices
     for _ in range(steps):
-        v = v + TAUBIN_LAMBDA * (average @ v - v)
-        v = v + TAUBIN_MU * (average @ v - v)
+        v = v + denoising.taubin_lambda * (average @ v - v)
+        v = v + denoising.taubin_mu * (average @ v - v)
     return mesh.with_vertices(v)
 
 
-def denoise_mesh(mesh: Mesh, area_ratio: float) -> tuple[Mesh, int, float]:
+def denoise_mesh(mesh: Mesh, area_ratio: float, denoising: Denoising = Denoising()) -> tuple[Mesh, int, float]:
     """Smooth ``mesh`` when its surface is crumpled at the scale of its edges.
 
     Vertex noise inflates the surface area (2.5-fold at a noise of half an edge), which breaks the
     scale normalization and every length of the method. A clean mesh loses at most ~3% of its area
-    to ``DENOISE_BLOCK`` Taubin steps (all TOSCA meshes, 5k and full resolution; coarse meshes of
+    to ``denoising.block`` Taubin steps (all TOSCA meshes, 5k and full resolution; coarse meshes of
     less than ~1000 vertices lose more); a noisy one much more. When the area exceeds
     ``area_ratio`` times the area after one block and the :func:`surface_roughness` is that of
-    noise (above ``NOISE_ROUGHNESS``), Taubin blocks are applied until a block shrinks the area by
-    less than ``DENOISE_SETTLED`` (at most ``DENOISE_MAX_STEPS`` steps). ``area_ratio`` <= 0
+    noise (above ``denoising.noise_roughness``), Taubin blocks are applied until a block shrinks the area by
+    less than ``denoising.settled`` (at most ``denoising.max_steps`` steps). ``area_ratio`` <= 0
     disables the test.
 
     Returns the mesh to analyse (the input itself when left alone), the number of steps applied and
@@ -78,19 +67,19 @@ def denoise_mesh(mesh: Mesh, area_ratio: float) -> tuple[Mesh, int, float]:
     if area_ratio <= 0:
         return mesh, 0, float("nan")
     average = _umbrella(mesh)  # connectivity only: one operator for every step
-    if surface_roughness(mesh, average) <= NOISE_ROUGHNESS:
+    if surface_roughness(mesh, average) <= denoising.noise_roughness:
         return mesh, 0, float("nan")
-    smoothed = taubin_smooth(mesh, DENOISE_BLOCK, average)
+    smoothed = taubin_smooth(mesh, denoising.block, average, denoising)
     previous = max(smoothed.area(), 1e-300)
     ratio = mesh.area() / previous
     if not ratio > area_ratio:
         return mesh, 0, ratio
-    steps = DENOISE_BLOCK
-    while steps < DENOISE_MAX_STEPS:
-        smoothed = taubin_smooth(smoothed, DENOISE_BLOCK, average)
-        steps += DENOISE_BLOCK
+    steps = denoising.block
+    while steps < denoising.max_steps:
+        smoothed = taubin_smooth(smoothed, denoising.block, average, denoising)
+        steps += denoising.block
         area = max(smoothed.area(), 1e-300)
-        settled, previous = previous / area < DENOISE_SETTLED, area
+        settled, previous = previous / area < denoising.settled, area
         if settled:
             break
     return smoothed, steps, ratio

@@ -18,6 +18,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..config import GeodesicMargins
 from ..errors import MeshError
 from .mesh import Mesh
 
@@ -178,11 +179,15 @@ class LocalGeodesicSolver:
         estimate: ``vertex -> (n,)`` approximate distance field (a coarse proxy's, see
             :class:`darcyan.geometry.proxy.CoarseProxy`), used to cut the balls and as the field beyond
             ``radius``; ``None``: no cutting, every field and ball is the whole mesh's.
+        margin: the balls are cut where the estimate exceeds ``radius`` by this share of it (the
+            coarse proxy's fast marching overestimates distances by up to ~12% of 0.25 on
+            TOSCA); if the cut still comes within the radius, the margin doubles.
     """
 
     def __init__(self, solver: GeodesicSolver, radius: float,
-                 estimate: Callable[[int], np.ndarray] | None = None):
+                 estimate: Callable[[int], np.ndarray] | None = None, margin: float = GeodesicMargins().ball):
         self.solver = solver
+        self.margin = float(margin)
         self.mesh = solver.mesh
         self.radius = float(radius)
         self.estimate = estimate
@@ -223,7 +228,7 @@ class LocalGeodesicSolver:
         if self.estimate is None:
             return self._whole(vertex)
         estimate = self._estimate(vertex)
-        margin = BALL_MARGIN * self.radius
+        margin = self.margin * self.radius
         while True:
             inside = (estimate[mesh.faces] <= self.radius + margin).all(axis=1)
             inside |= (mesh.faces == vertex).any(axis=1)
@@ -270,8 +275,3 @@ def _manifold_piece(mesh: Mesh, inside: np.ndarray) -> tuple[Mesh, np.ndarray, n
         inside = inside | around[mesh.faces].any(axis=1)
     return None
 
-
-# The balls are cut where the estimated distance exceeds the radius by this fraction of it (the
-# coarse proxy's fast marching overestimates distances by up to ~12% of 0.25 on TOSCA); if the cut
-# still comes within the radius, the margin doubles.
-BALL_MARGIN = 0.3

@@ -139,7 +139,7 @@ def prepare_shape(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: b
     :class:`~darcyan.errors.MeshError` for input it cannot use.
     """
     prepared, changes = prepare_mesh(mesh, repair=repair)
-    prepared, steps, area_ratio = denoise_mesh(prepared, config.denoise_area_ratio)
+    prepared, steps, area_ratio = denoise_mesh(prepared, config.denoise_area_ratio, config.denoising)
     if steps:
         warnings.warn(f"{mesh.name}: the surface is crumpled at the scale of its edges (its area is "
                       f"{area_ratio:.2f} times that of a smoothed copy: vertex noise?); analysed after "

@@ -8,6 +8,7 @@ entry.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import tempfile
@@ -16,6 +17,8 @@ from pathlib import Path
 import numpy as np
 
 CACHE_FORMAT = "2"
+# The parts of darcyan whose code decides what is cached (pictures and the command line do not).
+RESULT_CODE = ("config.py", "geometry", "io", "method", "dense", "eval", "bench")
 
 
 def default_cache_dir() -> Path:
@@ -24,6 +27,20 @@ def default_cache_dir() -> Path:
         return Path(os.environ["DARCYAN_CACHE"])
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return Path(base) / "darcyan"
+
+
+@functools.lru_cache(maxsize=1)
+def code_digest() -> str:
+    """sha1 of darcyan's own source files that cached results depend on (:data:`RESULT_CODE`):
+    an entry made by other code is never reused, and no format version is bumped by hand."""
+    package = Path(__file__).resolve().parents[1]
+    h = hashlib.sha1()
+    for part in RESULT_CODE:
+        files = [package / part] if part.endswith(".py") else sorted((package / part).rglob("*.py"))
+        for path in files:
+            h.update(path.relative_to(package).as_posix().encode())
+            h.update(path.read_bytes())
+    return h.hexdigest()[:16]
 
 
 def file_digest(path: str | os.PathLike) -> str:

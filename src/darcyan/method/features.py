@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import DarcyanConfig
+from ..config import DarcyanConfig, HeatKernel
 from ..geometry.geodesics import GeodesicSolver, LocalGeodesicSolver
 from ..geometry.mesh import Mesh
 from ..geometry.operators import mixed_voronoi_area
@@ -67,7 +67,8 @@ def farthest_point_sources(mesh: Mesh, solver: GeodesicSolver, count: int) -> tu
     return np.array(sources, dtype=np.int64), np.array(fields)
 
 
-def average_geodesic_distance(mesh: Mesh, solver: GeodesicSolver, sources: int, smoothing: float = 0.0) -> AGD:
+def average_geodesic_distance(mesh: Mesh, solver: GeodesicSolver, sources: int, smoothing: float = 0.0,
+                              diffusion_steps: int = HeatKernel().diffusion_steps) -> AGD:
     """Approximate AGD from ``sources`` farthest-point samples weighted by their Voronoi areas.
 
     Args:
@@ -82,30 +83,26 @@ def average_geodesic_distance(mesh: Mesh, solver: GeodesicSolver, sources: int, 
     cell_area = np.bincount(owner, weights=area, minlength=len(src))
     values = (cell_area[:, None] * fields).sum(axis=0) / cell_area.sum()
     if smoothing > 0:
-        values = heat_diffuse(mesh, values, smoothing, area)
+        values = heat_diffuse(mesh, values, smoothing, area, diffusion_steps)
     return AGD(values, src)
 
 
-def heat_diffuse(mesh: Mesh, values: np.ndarray, length: float, area: np.ndarray | None = None) -> np.ndarray:
-    """Diffuse ``values (n,)`` for the time that spreads heat over about ``length``: backward
-    Euler steps of du/dt = Laplace(u) with total time length**2 / 2 (one factorization)."""
+def heat_diffuse(mesh: Mesh, values: np.ndarray, length: float, area: np.ndarray | None = None,
+                 steps: int = HeatKernel().diffusion_steps) -> np.ndarray:
+    """Diffuse ``values (n,)`` for the time that spreads heat over about ``length``: ``steps``
+    backward Euler steps of du/dt = Laplace(u) with total time length**2 / 2 (one factorization)."""
     import scipy.sparse as sp
     from scipy.sparse.linalg import splu
 
     from ..geometry.operators import cotangent_laplacian
 
     area = mixed_voronoi_area(mesh) if area is None else area
-    step = length**2 / 2 / HEAT_STEPS
+    step = length**2 / 2 / steps
     mass = sp.diags(area)
     solve = splu((mass - step * cotangent_laplacian(mesh)).tocsc()).solve
-    for _ in range(HEAT_STEPS):
+    for _ in range(steps):
         values = solve(mass @ values)
     return values
-
-
-# Backward-Euler steps of the AGD diffusion: one step is a wide, heavy-tailed kernel; a few
-# approach a Gaussian at the same cost of one factorization.
-HEAT_STEPS = 4
 
 
 def one_ring_maxima(mesh: Mesh, values: np.ndarray) -> np.ndarray:
@@ -117,28 +114,22 @@ def one_ring_maxima(mesh: Mesh, values: np.ndarray) -> np.ndarray:
     return np.flatnonzero(values >= neighbour_max)
 
 
-def heat_kernel_diagonal(mesh: Mesh, length: float) -> np.ndarray:
+def heat_kernel_diagonal(mesh: Mesh, length: float, heat: HeatKernel = HeatKernel()) -> np.ndarray:
     """``(n,)`` ``k_t(v, v) = sum_i exp(-lambda_i t) phi_i(v)^2`` at ``t = length**2 / 2`` (the
     heat kernel signature at one time; 1/area units) from the Laplace-Beltrami eigenpairs whose
-    ``exp(-lambda t)`` exceeds ``exp(-HEAT_KERNEL_DECAY)`` (Weyl's law: about
-    ``HEAT_KERNEL_DECAY / (4 pi t)`` of them on a surface of area 1). Unlike the HKS baseline
+    ``exp(-lambda t)`` exceeds ``exp(-heat.decay)`` (Weyl's law: about
+    ``heat.decay / (4 pi t)`` of them on a surface of area 1). Unlike the HKS baseline
     (:func:`darcyan.eval.baselines.heat_kernel_signature`: many times, scaled by the heat trace,
     without the constant eigenfunction) one time, unscaled, so that ratios between vertices are
     those of the kernel itself."""
     from ..geometry.spectral import laplace_beltrami_spectrum
 
     time = length**2 / 2
-    count = int(np.clip(np.ceil(HEAT_KERNEL_DECAY * mesh.area() / (4 * np.pi * time)), 10, 400))
-    spectrum = laplace_beltrami_spectrum(mesh, count, tol=HEAT_KERNEL_TOLERANCE)
+    count = int(np.clip(np.ceil(heat.decay * mesh.area() / (4 * np.pi * time)), 10, 400))
+    spectrum = laplace_beltrami_spectrum(mesh, count, tol=heat.tolerance)
     return (spectrum.vectors**2 * np.exp(-spectrum.values * time)).sum(axis=1)
 
 
-# exp(-6) = 2.5e-3: each eigenpair beyond weighs less than that in the heat kernel at the chosen
-# time (on a sphere the ones left out add 0.2%; the tips compared differ by 10% or more).
-HEAT_KERNEL_DECAY = 6.0
-# eigsh's relative accuracy: 1e-2 changes the heat kernel by 1e-5 (tosca-5k cat0) and saves a
-# third of the eigensolver's time, the bulk of this function's.
-HEAT_KERNEL_TOLERANCE = 1e-2
 
 
 def extremities(mesh: Mesh, solver: GeodesicSolver | LocalGeodesicSolver, agd: AGD, config: DarcyanConfig,

@@ -32,9 +32,6 @@ from ..geometry.geodesics import (
 )
 from ..geometry.mesh import Mesh
 
-# Radial geodesics are traced this much beyond R: fast marching overestimates distance slightly,
-# so U reaches R a little later along the line than arc length does.
-TRACE_MARGIN = 1.5
 
 
 @dataclass(frozen=True)
@@ -122,18 +119,19 @@ def darcyan_grids(mesh: Mesh, solver: GeodesicSolver | LocalGeodesicSolver, vert
             distances[v] = local.distance(v)
         field = toward if toward is not None else local.solver.distance(int(np.argmax(distances[v])))
         ball = local.ball(v)
-        grids.append(_grid(ball, distances[v][ball.vertices], field[ball.vertices], normals[v], radii, angles, q))
+        grids.append(_grid(ball, distances[v][ball.vertices], field[ball.vertices], normals[v], radii, angles, q,
+                           config.margins.trace))
     return grids
 
 
 def _grid(ball: GeodesicBall, distance: np.ndarray, toward: np.ndarray, normal: np.ndarray,
-          radii: np.ndarray, angles: np.ndarray, q: int) -> DarcyanGrid:
+          radii: np.ndarray, angles: np.ndarray, q: int, trace: float) -> DarcyanGrid:
     """One grid, built on ``ball`` (its fields ``distance`` and ``toward`` given on the ball's
     vertices); faces are reported in the whole mesh's numbering."""
     c, solver = ball.centre, ball.solver
     ref = reference_direction(ball.mesh, c, toward, normal)
     side = np.cross(normal, ref)
-    paths = [solver.trace(c, np.cos(a) * ref + np.sin(a) * side, TRACE_MARGIN * radii[-1]) for a in angles]
+    paths = [solver.trace(c, np.cos(a) * ref + np.sin(a) * side, trace * radii[-1]) for a in angles]
     # Locate every traced point at once, read U there, and cut each line at the level radii.
     offsets = np.concatenate([[0], np.cumsum([len(p) for p in paths])])
     faces, bary = solver.locate(np.concatenate(paths))
@@ -157,7 +155,7 @@ def _grid(ball: GeodesicBall, distance: np.ndarray, toward: np.ndarray, normal: 
 
 def grid_reach(config: DarcyanConfig) -> float:
     """Geodesic radius (mesh units) around its centre that a grid's construction looks at."""
-    return TRACE_MARGIN * config.level_radii[-1]
+    return config.margins.trace * config.level_radii[-1]
 
 
 def darcyan_grid(mesh: Mesh, solver: GeodesicSolver, vertex: int, config: DarcyanConfig,

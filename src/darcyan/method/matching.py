@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..config import Consistency
 from ..errors import ConfigError
 
 
@@ -87,28 +88,14 @@ def drop_dissimilar(matches: Matches, desc_1: np.ndarray, desc_2: np.ndarray, li
     return Matches(matches.source[keep], matches.target[keep], matches.distance[keep])
 
 
-@dataclass(frozen=True)
-class ConsistencyWeights:
-    """Weights of :func:`consistent_candidates`' score (see there); all terms are dimensionless.
-
-    Chosen on tosca-5k (``docs/parameters.md``): geodesic distances between true corresponding
-    feature points change by 4% (median) to 28% (99th percentile) between TOSCA poses, hence the
-    wide tolerance.
-    """
-
-    geodesic_tolerance: float = 0.3  # relative change of a geodesic distance still counted as kept
-    geodesic: float = 0.5  # weight of one pair of matches keeping (+) or breaking (-) its distance
-    beam_width: int = 128
-
-
 def consistent_matching(desc_1: np.ndarray, desc_2: np.ndarray, geodesics_1: np.ndarray, geodesics_2: np.ndarray,
-                        weights: ConsistencyWeights = ConsistencyWeights()) -> Matches:
+                        weights: Consistency = Consistency()) -> Matches:
     """The best of :func:`consistent_candidates`."""
     return consistent_candidates(desc_1, desc_2, geodesics_1, geodesics_2, weights)[0][1]
 
 
 def consistent_candidates(desc_1: np.ndarray, desc_2: np.ndarray, geodesics_1: np.ndarray, geodesics_2: np.ndarray,
-                          weights: ConsistencyWeights = ConsistencyWeights()) -> list[tuple[float, Matches]]:
+                          weights: Consistency = Consistency()) -> list[tuple[float, Matches]]:
     """One-to-one partial matchings that keep the shapes' layout, best first: ``(score, matches)``.
 
     Maximizes over assignments pi (each target used at most once; a source may stay unmatched)

@@ -24,7 +24,7 @@ from ..geometry.curvature import Curvatures, principal_curvatures
 from ..geometry.geodesics import LocalGeodesicSolver
 from ..geometry.mesh import Mesh, MeshWarning
 from ..geometry.shape import Shape, prepare_shape
-from ..io.cache import ShapeCache, file_digest
+from ..io.cache import ShapeCache, code_digest, file_digest
 from ..io.mesh_files import load_mesh
 from .descriptors import angular_profiles, curvature_descriptors
 from .features import (
@@ -38,7 +38,7 @@ from .features import (
 )
 from .grid import darcyan_grids, grid_reach
 from .matching import Matches, consistent_candidates, drop_dissimilar, match_descriptors
-from .symmetry import PROFILE_LEVELS, OrientedSurface, choose_orientation, curvature_signature
+from .symmetry import OrientedSurface, choose_orientation, curvature_signature
 
 
 @dataclass(frozen=True)
@@ -193,7 +193,8 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
     stage("agd")
     proxy = shape.proxy(config.proxy_vertices)
     if proxy is None:
-        agd = average_geodesic_distance(normalized, solver, config.agd_sources, config.agd_smoothing)
+        agd = average_geodesic_distance(normalized, solver, config.agd_sources, config.agd_smoothing,
+                                        config.heat.diffusion_steps)
     else:
         # The distances on the proxy, the diffusion on the full mesh: diffused on the proxy, the
         # field's maxima would sit on proxy vertices, which decimation places differently in
@@ -201,7 +202,7 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
         coarse = average_geodesic_distance(proxy.mesh, proxy.solver, config.agd_sources)
         values = proxy.to_full(coarse.values)
         if config.agd_smoothing > 0:
-            values = heat_diffuse(normalized, values, config.agd_smoothing, curvatures.area)
+            values = heat_diffuse(normalized, values, config.agd_smoothing, curvatures.area, config.heat.diffusion_steps)
         agd = AGD(values, coarse.sources)
     done("agd")
     stage("features")
@@ -209,7 +210,7 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
     # An extremity's top beyond this radius (up to tip_radius) is read on that estimate too:
     # exact geodesics that far made every ball and grid about 40% dearer on the 52k humans.
     local = LocalGeodesicSolver(solver, max(config.extremity_radius, grid_reach(config)),
-                                None if proxy is None else proxy.distance)
+                                None if proxy is None else proxy.distance, config.margins.ball)
     distances: dict = {}
     features = extremities(normalized, local, agd, config, distances)
     if len(features) == 0:
@@ -233,7 +234,7 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
         normalized.vertices.astype(np.float32), shape.normals.astype(np.float32),
         np.array([distances[int(v)] for v in features.vertices], dtype=np.float32),
         _signature(shape, proxy, config).astype(np.float32), curvatures.area.astype(np.float32),
-        angular_profiles(normalized, grids, curvatures, PROFILE_LEVELS).astype(np.float32))
+        angular_profiles(normalized, grids, curvatures, config.mirror.profile_levels).astype(np.float32))
     done("layout")
     description = ShapeDescription(
         name=shape.name, n_input_vertices=shape.n_input_vertices,
@@ -245,20 +246,21 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
 
 def _heat_kernel(shape: Shape, proxy, config: DarcyanConfig) -> np.ndarray:
     """``(n,)`` heat kernel diagonal at the AGD diffusion's scale, on the proxy when it has at
-    least ``HEAT_KERNEL_VERTICES`` vertices, else on a copy of that size or the mesh itself."""
-    if proxy is None or proxy.mesh.n_vertices < HEAT_KERNEL_VERTICES:
-        proxy = shape.proxy(HEAT_KERNEL_VERTICES)
+    least ``config.heat.vertices`` vertices, else on a copy of that size or the mesh itself."""
+    if proxy is None or proxy.mesh.n_vertices < config.heat.vertices:
+        proxy = shape.proxy(config.heat.vertices)
     if proxy is None:
-        return heat_kernel_diagonal(shape.mesh, config.agd_smoothing)
-    return proxy.to_full(heat_kernel_diagonal(proxy.mesh, config.agd_smoothing))
+        return heat_kernel_diagonal(shape.mesh, config.agd_smoothing, config.heat)
+    return proxy.to_full(heat_kernel_diagonal(proxy.mesh, config.agd_smoothing, config.heat))
 
 
 def _signature(shape: Shape, proxy, config: DarcyanConfig) -> np.ndarray:
     """The mirror test's point signature, on the coarse proxy when there is one."""
+    lengths, steps = config.mirror.signature_lengths, config.heat.diffusion_steps
     if proxy is None:
-        return curvature_signature(shape.mesh, shape.curvatures(config.curvature_smoothing).mean)
+        return curvature_signature(shape.mesh, shape.curvatures(config.curvature_smoothing).mean, lengths, steps)
     coarse_mean = principal_curvatures(proxy.mesh, smoothing=config.curvature_smoothing).mean
-    return proxy.to_full(curvature_signature(proxy.mesh, coarse_mean))
+    return proxy.to_full(curvature_signature(proxy.mesh, coarse_mean, lengths, steps))
 
 
 def feature_geodesics(vertices: np.ndarray, distances: dict) -> np.ndarray:
@@ -345,8 +347,7 @@ def _describe_arrays(task: tuple) -> tuple:
 def _cache_key(cache: ShapeCache | None, path: Path, config: DarcyanConfig, repair: bool) -> str | None:
     if cache is None:
         return None
-    return cache.key(file_digest(path), config.fingerprint(*DESCRIBE_FIELDS), f"repair={repair}",
-                     f"description={DESCRIPTION_FORMAT}")
+    return cache.key(file_digest(path), config.describe_fingerprint(), f"repair={repair}", f"code={code_digest()}")
 
 
 def _cached(cache: ShapeCache | None, key: str | None, path: Path) -> ShapeDescription | None:
@@ -373,28 +374,10 @@ def _reemit(caught: list) -> list:
     return said
 
 
-# Bumped when what a description holds changes (2: the signature's scaling; 3: feature distances
-# beyond the grids from the coarse proxy; 4: AGD diffused on the full mesh; 5: vertex areas for the
-# mirror test; 6: angular curvature profiles for handedness; 7: feature points moved to the
-# sharpest tip of their extremity), so old descriptions are recomputed
-# while other cached work (spectra, mirror maps) is kept.
-DESCRIPTION_FORMAT = 7
-
-# The heat kernel that picks each extremity's sharpest tip is computed on the AGD's proxy, or on a
-# copy of at least this many vertices if the proxy is coarser: on 1500 vertices (tosca-5k michael)
-# it moved a hand in 2 of 8 poses and missed the head in another, which 5000 do not.
-HEAT_KERNEL_VERTICES = 5000
-
 # What a cache entry must hold to be used (older entries without them are recomputed).
 _CACHED_KEYS = {"feature_vertices", "feature_agd", "descriptors", "feature_geodesics", "n_input_vertices",
                 "changes", "surface_points", "surface_normals", "surface_landmark_distances", "surface_areas",
                 "surface_profiles"}
-
-
-# The parameters a shape description depends on (matching does not change it).
-DESCRIBE_FIELDS = ("levels", "radial_lines", "radius", "interpolation", "curvature_smoothing",
-                   "agd_sources", "agd_smoothing", "extremity_radius", "min_agd_quantile", "max_features",
-                   "proxy_vertices", "denoise_area_ratio", "tip_gain", "tip_radius", "tip_agd_drop")
 
 
 def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
@@ -402,8 +385,8 @@ def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
     """Match the feature points of ``shape_1`` to those of ``shape_2`` by descriptor distance."""
     if config.matching == "consistent":
         candidates = consistent_candidates(shape_1.descriptors, shape_2.descriptors, shape_1.feature_geodesics,
-                                           shape_2.feature_geodesics)
-        matches = choose_orientation(candidates, shape_1.surface, shape_2.surface)
+                                           shape_2.feature_geodesics, config.consistency)
+        matches = choose_orientation(candidates, shape_1.surface, shape_2.surface, config.mirror)
     else:
         matches = match_descriptors(shape_1.descriptors, shape_2.descriptors, config.matching)
     matches = drop_dissimilar(matches, shape_1.descriptors, shape_2.descriptors, config.max_match_distance)

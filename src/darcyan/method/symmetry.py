@@ -24,37 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-# Sample points on the source; their spacing sets the size of the test triangles (area 1:
-# spacing about 1/sqrt(SAMPLES) = 0.035 in sqrt(area) units). Each sample makes a triangle with
-# every two of its NEIGHBOURS nearest samples, so most test triangles are several spacings wide,
-# larger than the coarse map's error. Chosen on tosca-5k (docs/parameters.md): with 200 samples
-# and one triangle per sample, 165 of the 203 test pairs got their true matching; with these, 190.
-SAMPLES = 800
-NEIGHBOURS = 6
-TARGET_POINTS = 10_000
-# A triangle votes only when it is far from degenerate on both shapes (|sin| of its corner).
-MIN_SINE = 0.3
-# Diffusion lengths (sqrt(area) units) of the mean curvature making up the point signature, and
-# its weight against landmark distances in the coarse map (chosen on tosca-5k, docs/parameters.md).
-SIGNATURE_LENGTHS = (0.05, 0.1, 0.2)
-SIGNATURE_WEIGHT = 0.9
-# Candidates (best first) whose orientation is tested, and the score of full agreement per match.
-# 16 rather than 8: on tosca-hires the dog's true matching was sometimes ranked below 8 by a
-# non-repeatable point's place (dog 0.946 -> 0.953 strict, cat +7 matches; tosca-5k dog +3); 32
-# gained 4 more dog matches for twice the test's time (docs/parameters.md).
-CANDIDATES_TESTED = 16
-ORIENTATION_WEIGHT = 1.0
-# Handedness: the innermost level curves of the Darcyan grid (0.02 and 0.04 from the feature
-# point with the default grid) carry the chiral detail of a tip (outer ones, a whole limb, are
-# mirror-symmetric about its axis). Profiles are compared under every rotation: at a tip the
-# grid's angle 0 (toward the shape's centre) is ill-conditioned and turns between poses and in
-# a mirror. Two profiles count only as far as they agree, in one turning sense, better than
-# PROFILE_AGREEMENT times unrelated profiles would (mean squared difference e1 + e2): an
-# animal's paw changes its profile from pose to pose, and then the sign is noise. The weight is
-# per match. Chosen on every pair of every class of both sets (docs/parameters.md).
-PROFILE_LEVELS = 2
-PROFILE_AGREEMENT = 0.8
-HANDEDNESS_WEIGHT = 2.0
+from ..config import HeatKernel, MirrorTest
+
+# The test's settings (sample counts, weights, the handedness levels, ...) are DarcyanConfig.mirror:
+# :class:`darcyan.config.MirrorTest`, where each is documented with how it was chosen.
 
 
 @dataclass(frozen=True)
@@ -82,46 +55,49 @@ class OrientedSurface:
     profiles: np.ndarray | None = None
 
 
-def curvature_signature(mesh, mean_curvature: np.ndarray) -> np.ndarray:
-    """``(n, 3)`` mean curvature diffused over ``SIGNATURE_LENGTHS``, each scaled to mean
+def curvature_signature(mesh, mean_curvature: np.ndarray, lengths=MirrorTest().signature_lengths,
+                        diffusion_steps: int = HeatKernel().diffusion_steps) -> np.ndarray:
+    """``(n, len(lengths))`` mean curvature diffused over each of ``lengths``, each scaled to mean
     magnitude 1: a cheap, intrinsic, mirror-blind signature that differs between the front and
     the back of a torso or a limb."""
     from .features import heat_diffuse
 
     columns = []
-    for length in SIGNATURE_LENGTHS:
-        c = heat_diffuse(mesh, mean_curvature, length)
+    for length in lengths:
+        c = heat_diffuse(mesh, mean_curvature, length, steps=diffusion_steps)
         columns.append(c / max(float(np.abs(c).mean()), 1e-12))
     return np.stack(columns, axis=1)
 
 
-def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2: OrientedSurface | None):
-    """Among ``candidates`` ``[(score, Matches), ...]`` (best first, from
-    :func:`darcyan.method.matching.consistent_candidates`), the matches with the best score plus
-    ``ORIENTATION_WEIGHT * orientation_agreement * len(matches)`` plus ``HANDEDNESS_WEIGHT``
-    times the :func:`handedness` of its matches (when both surfaces carry profiles): a mirror
-    image, whole or partial, loses against the orientation-preserving matching it ties with.
-    Without surfaces: the best score."""
+def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2: OrientedSurface | None,
+                       test: MirrorTest = MirrorTest()):
+    """Among the first ``test.candidates`` of ``candidates`` ``[(score, Matches), ...]`` (best
+    first, from :func:`darcyan.method.matching.consistent_candidates`), the matches with the best
+    score plus ``test.orientation_weight * orientation_agreement * len(matches)`` plus
+    ``test.handedness_weight`` times the :func:`handedness` of its matches (when both surfaces
+    carry profiles): a mirror image, whole or partial, loses against the orientation-preserving
+    matching it ties with. Without surfaces: the best score."""
     if surface_1 is None or surface_2 is None:
         return candidates[0][1]
     hand = None
     if surface_1.profiles is not None and surface_2.profiles is not None:
-        hand = HANDEDNESS_WEIGHT * handedness(surface_1.profiles, surface_2.profiles)
+        hand = test.handedness_weight * handedness(surface_1.profiles, surface_2.profiles, test.profile_agreement)
     best, best_total = candidates[0][1], -np.inf
-    points = mirror_test_points(surface_1, surface_2)  # the same for every candidate: drawn once
-    for score, matches in candidates[:CANDIDATES_TESTED]:
+    points = mirror_test_points(surface_1, surface_2, test)  # the same for every candidate: drawn once
+    for score, matches in candidates[:test.candidates]:
         if hand is not None:
             score = score + float(hand[matches.source, matches.target].sum())
-        if score + ORIENTATION_WEIGHT * len(matches) <= best_total:
+        if score + test.orientation_weight * len(matches) <= best_total:
             continue  # even full agreement would not beat the best so far
-        agreement = orientation_agreement(surface_1, surface_2, matches.source, matches.target, points=points)
-        total = score + ORIENTATION_WEIGHT * agreement * len(matches)
+        agreement = orientation_agreement(surface_1, surface_2, matches.source, matches.target, test, points)
+        total = score + test.orientation_weight * agreement * len(matches)
         if total > best_total:
             best, best_total = matches, total
     return best
 
 
-def handedness(profiles_1: np.ndarray, profiles_2: np.ndarray, agreement: float = PROFILE_AGREEMENT) -> np.ndarray:
+def handedness(profiles_1: np.ndarray, profiles_2: np.ndarray,
+               agreement: float = MirrorTest().profile_agreement) -> np.ndarray:
     """``(k1, k2)`` in [-1, 1]: for feature points i of shape 1 and j of shape 2, how much better
     i's angular profile matches j's read in the same turning sense than read in the opposite one.
 
@@ -173,44 +149,43 @@ class MirrorTestPoints:
     neighbours: np.ndarray
 
 
-def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface, seed: int = 0,
-                       samples: int = SAMPLES, neighbours: int = NEIGHBOURS) -> MirrorTestPoints:
-    """The orientation test's ``samples`` vertices of shape 1, their ``neighbours`` nearest
-    samples, and the vertices of shape 2 among which their images are looked for, drawn with
-    ``seed``."""
-    rng = np.random.default_rng(seed)
+def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface,
+                       test: MirrorTest = MirrorTest()) -> MirrorTestPoints:
+    """The orientation test's ``test.samples`` vertices of shape 1, their ``test.neighbours``
+    nearest samples, and the vertices of shape 2 among which their images are looked for, drawn
+    with ``test.seed``."""
+    rng = np.random.default_rng(test.seed)
     # Drawn by area: TOSCA's full-resolution humans carry most vertices in the face and hands
     # (vertex areas span a factor of 1000), and a draw by vertex left the torso and limbs,
     # where a left/right swap shows, almost untested.
-    drawn = surface_samples(surface_1, samples, rng)
+    drawn = surface_samples(surface_1, test.samples, rng)
     n2 = len(surface_2.points)
-    # Images are looked for among at most TARGET_POINTS vertices: far finer than the test
+    # Images are looked for among at most test.target_points vertices: far finer than the test
     # triangles, and a 52k-vertex target costs no more than a 10k one.
-    targets = np.sort(surface_samples(surface_2, TARGET_POINTS, rng)) if n2 > TARGET_POINTS else np.arange(n2)
-    near = nearest_neighbours(surface_1.points[drawn], min(neighbours, len(drawn) - 1))
+    many = n2 > test.target_points
+    targets = np.sort(surface_samples(surface_2, test.target_points, rng)) if many else np.arange(n2)
+    near = nearest_neighbours(surface_1.points[drawn], min(test.neighbours, len(drawn) - 1))
     return MirrorTestPoints(drawn, targets, near)
 
 
 def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface, landmarks_1: np.ndarray,
-                          landmarks_2: np.ndarray, seed: int = 0, samples: int = SAMPLES,
-                          neighbours: int = NEIGHBOURS, signature_weight: float = SIGNATURE_WEIGHT,
+                          landmarks_2: np.ndarray, test: MirrorTest = MirrorTest(),
                           points: MirrorTestPoints | None = None) -> float:
     """In [-1, 1]: +1 when the correspondence ``landmarks_1[i] <-> landmarks_2[i]`` (indices into
     the feature sets) preserves orientation everywhere, -1 when it is a mirror image; 0 when
-    fewer than 3 landmarks make the test meaningless. ``samples``, ``neighbours`` and
-    ``signature_weight`` default to the module's constants (see there); ``points``, the result
-    of :func:`mirror_test_points` for ``seed``, ``samples`` and ``neighbours``, saves drawing
-    them again."""
+    fewer than 3 landmarks make the test meaningless. ``test``: the settings (sample points,
+    signature weight, ...); ``points``, the result of :func:`mirror_test_points` for ``test``,
+    saves drawing them again."""
     if len(landmarks_1) < 3:
         return 0.0
     if points is None:
-        points = mirror_test_points(surface_1, surface_2, seed, samples, neighbours)
+        points = mirror_test_points(surface_1, surface_2, test)
     samples, targets, near = points.samples, points.targets, points.neighbours
     embed_1 = surface_1.landmark_distances[landmarks_1][:, samples].T  # (s, m)
     embed_2 = surface_2.landmark_distances[landmarks_2][:, targets].T  # (t, m)
     if surface_1.signature is not None and surface_2.signature is not None:
-        embed_1 = np.hstack([embed_1, signature_weight * surface_1.signature[samples]])
-        embed_2 = np.hstack([embed_2, signature_weight * surface_2.signature[targets]])
+        embed_1 = np.hstack([embed_1, test.signature_weight * surface_1.signature[samples]])
+        embed_2 = np.hstack([embed_2, test.signature_weight * surface_2.signature[targets]])
     image = targets[nearest_points(embed_2, embed_1)]  # each sample's image on shape 2
     x = surface_1.points[samples]
     # Every triangle (sample, two of its neighbours) at once.
@@ -219,7 +194,7 @@ def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface
     q, r = near[:, first].ravel(), near[:, second].ravel()
     s1 = _corner_sine(x, surface_1.normals[samples][p], p, q, r)
     s2 = _corner_sine(surface_2.points[image], surface_2.normals[image][p], p, q, r)
-    ok = (np.abs(s1) >= MIN_SINE) & (np.abs(s2) >= MIN_SINE)
+    ok = (np.abs(s1) >= test.min_sine) & (np.abs(s2) >= test.min_sine)
     votes = np.sign(s1[ok]) * np.sign(s2[ok])
     return float(votes.mean()) if len(votes) else 0.0
 

@@ -1,0 +1,91 @@
+"""The configuration: every setting typed and checked, cache keys derived from the fields."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import pytest
+
+from darcyan.config import DESCRIBE, MATCH, PREPARE, SECTIONS, DarcyanConfig, MirrorTest, _stage_of, _staged_fields
+from darcyan.errors import ConfigError
+
+
+def _other_value(value):
+    """A different value of the same type, inside every field's valid range (checked by the
+    config itself when the changed copy is built)."""
+    if isinstance(value, str):
+        return "nearest" if value != "nearest" else "consistent"
+    if isinstance(value, bool):
+        return not value
+    if isinstance(value, int):
+        return value + 1
+    if isinstance(value, float):
+        return value * 1.1 + (0.01 if value >= 0 else -0.01)
+    if isinstance(value, tuple):
+        return tuple(v * 1.1 for v in value)
+    raise AssertionError(f"no other value for {value!r}")
+
+
+def _changed(config: DarcyanConfig, dotted: str) -> DarcyanConfig:
+    if "." not in dotted:
+        return config.replace(**{dotted: _other_value(getattr(config, dotted))})
+    section, leaf = dotted.split(".")
+    owner = getattr(config, section)
+    return config.replace(**{section: dataclasses.replace(owner, **{leaf: _other_value(getattr(owner, leaf))})})
+
+
+LEAVES = [name for name, _ in _staged_fields(DarcyanConfig())]
+
+
+def test_every_setting_is_found():
+    """The walk over the fields reaches the sections: the keys below cannot pass vacuously."""
+    assert len(LEAVES) > 40
+    assert {"radius", "matching", "mirror.handedness_weight", "heat.vertices", "denoising.block"} <= set(LEAVES)
+    assert {_stage_of(DarcyanConfig(), name) for name in LEAVES} == {PREPARE, DESCRIBE, MATCH}
+
+
+@pytest.mark.parametrize("name", LEAVES)
+def test_changing_a_field_changes_the_keys_of_its_stage(name):
+    base = DarcyanConfig()
+    changed = _changed(base, name)
+    stage = _stage_of(base, name)
+    assert changed.fingerprint() != base.fingerprint()
+    # preparing feeds describing: a prepare setting changes both keys, a describe setting the
+    # description's only, a match setting neither (a cached description stays valid)
+    assert (changed.prepare_fingerprint() != base.prepare_fingerprint()) == (stage == PREPARE)
+    assert (changed.describe_fingerprint() != base.describe_fingerprint()) == (stage in (PREPARE, DESCRIBE))
+
+
+def test_the_config_survives_json_and_the_paper_preset_differs():
+    for config in (DarcyanConfig(), DarcyanConfig.paper(), DarcyanConfig(mirror=MirrorTest(samples=100))):
+        again = DarcyanConfig(**json.loads(json.dumps(config.as_dict())))
+        assert again == config and again.fingerprint() == config.fingerprint()
+    assert DarcyanConfig.paper().describe_fingerprint() != DarcyanConfig().describe_fingerprint()
+
+
+@pytest.mark.parametrize("section, field, value", [
+    ("mirror", "samples", 0), ("mirror", "min_sine", 1.5), ("heat", "tolerance", -1.0),
+    ("denoising", "taubin_mu", 0.2), ("margins", "trace", 0.5), ("consistency", "beam_width", 0)])
+def test_a_section_value_out_of_range_names_it(section, field, value):
+    kind = SECTIONS[section]
+    with pytest.raises(ConfigError, match=f"{kind.__name__}.{field}"):
+        kind(**{field: value})
+
+
+def test_a_section_of_the_wrong_type_is_refused():
+    with pytest.raises(ConfigError, match="mirror must be a MirrorTest"):
+        DarcyanConfig(mirror=3)
+
+
+def test_settings_from_a_json_file_reach_every_section(tmp_path, capsys):
+    from darcyan.cli import _config, build_parser, main
+
+    path = tmp_path / "settings.json"
+    path.write_text(json.dumps({"radius": 0.1, "mirror": {"samples": 400}, "heat": {"vertices": 3000}}))
+    config = _config(build_parser().parse_args(["features", "x.off", "--config", str(path), "--levels", "5"]))
+    assert (config.radius, config.levels, config.mirror.samples, config.heat.vertices) == (0.1, 5, 400, 3000)
+    assert config.mirror.neighbours == MirrorTest().neighbours  # the rest of the section kept
+    path.write_text(json.dumps({"mirror": {"sample": 400}}))
+    assert main(["features", "x.off", "--config", str(path)]) == 2
+    assert "unknown setting mirror.sample" in capsys.readouterr().err
