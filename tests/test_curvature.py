@@ -17,6 +17,13 @@ def test_sphere_principal_curvatures_are_one_over_r(sphere):
     np.testing.assert_allclose(c.kmin, 0.5, rtol=0.02)
 
 
+def test_sphere_mean_and_gaussian_curvature_are_one_over_r_and_r_squared(sphere):
+    c = principal_curvatures(sphere)  # radius 2, outward-oriented as built
+    np.testing.assert_allclose(c.mean, 0.5, rtol=1e-4)  # within 2e-6 on this icosphere
+    np.testing.assert_allclose(c.gaussian, 0.25, rtol=1e-3)  # within 4e-4
+    assert np.isclose((c.gaussian * c.area).sum(), 4 * np.pi, rtol=1e-12)  # Gauss-Bonnet
+
+
 def test_inward_oriented_sphere_is_turned_outward(sphere):
     flipped = Mesh(sphere.vertices, sphere.faces[:, ::-1])
     mesh, _ = prepare_mesh(flipped)

@@ -7,7 +7,10 @@ curvature is the angle defect over the same area, and
     kmax, kmin = H +- sqrt(max(H^2 - K, 0)).
 
 Signs follow the outward normal: on a sphere of radius r both are +1/r; on a saddle kmin < 0.
-(libigl's ``principal_curvature`` fits quadrics: a different method, deliberately not used.)
+The three operators come from libigl (``cotmatrix``, ``massmatrix`` of Voronoi type,
+``gaussian_curvature``) and the normals are area-weighted (``per_vertex_normals``); see
+:mod:`darcyan.geometry.operators`. (libigl's ``principal_curvature`` fits quadrics: a different
+method, deliberately not used.)
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import numpy as np
 
 from .geodesics import vertex_normals
 from .mesh import Mesh, boundary_vertices, vertex_adjacency
-from .operators import _corner_geometry, _cotangent_matrix, _mixed_area, mixed_voronoi_area
+from .operators import cotangent_laplacian, mixed_voronoi_area, nondegenerate_faces
 
 
 @dataclass(frozen=True)
@@ -30,7 +33,6 @@ class Curvatures:
     mean: np.ndarray  # H = (kmax + kmin) / 2
     gaussian: np.ndarray  # K = kmax * kmin (before clamping H^2 - K at 0)
     area: np.ndarray  # A_mixed, the mixed Voronoi area of each vertex
-
 
 
 def principal_curvatures(mesh: Mesh, smoothing: int = 0) -> Curvatures:
@@ -46,22 +48,29 @@ def principal_curvatures(mesh: Mesh, smoothing: int = 0) -> Curvatures:
     Returns:
         :class:`Curvatures` in 1/(mesh length unit).
     """
-    geometry = _corner_geometry(mesh)  # computed once, shared by the three operators below
-    angles = geometry[1]
-    f = mesh.faces
-    n = mesh.n_vertices
-    area = _mixed_area(mesh, *geometry)
+    area = mixed_voronoi_area(mesh)
     safe_area = np.where(area > 0, area, np.inf)
-    laplace_x = _cotangent_matrix(mesh, geometry[0]) @ mesh.vertices  # = -2 A H n
+    laplace_x = cotangent_laplacian(mesh) @ mesh.vertices  # = -2 A H n
     normals = vertex_normals(mesh)
     mean = -np.einsum("ij,ij->i", laplace_x, normals) / (2.0 * safe_area)
-    angle_sum = np.bincount(f.ravel(), weights=angles.ravel(), minlength=n)
-    full_turn = np.where(boundary_vertices(mesh), np.pi, 2 * np.pi)
-    gaussian = (full_turn - angle_sum) / safe_area
+    gaussian = angle_defect(mesh) / safe_area
     if smoothing:
         mean, gaussian = smooth_vertex_fields(mesh, [mean, gaussian], smoothing, area)
     disc = np.sqrt(np.maximum(mean**2 - gaussian, 0.0))
     return Curvatures(mean + disc, mean - disc, mean, gaussian, area)
+
+
+def angle_defect(mesh: Mesh) -> np.ndarray:
+    """``(n,)`` the integrated Gaussian curvature: 2 pi minus the angles around an interior vertex,
+    pi minus them around a boundary vertex (the turning of the boundary there); over a closed
+    mesh they sum to 2 pi times its Euler characteristic (Gauss-Bonnet)."""
+    import igl  # lazily: igl imports scipy
+
+    defect = igl.gaussian_curvature(mesh.vertices, mesh.faces)
+    if not np.isfinite(defect).all():  # a face with coincident corners: NaN angles (ours: 0)
+        defect = igl.gaussian_curvature(mesh.vertices, nondegenerate_faces(mesh, keep_collinear=True))
+    # libigl subtracts the angles from 2 pi at every vertex, boundary ones included: pi there.
+    return defect - np.pi * boundary_vertices(mesh)
 
 
 def smooth_vertex_fields(mesh: Mesh, fields, iterations: int, area: np.ndarray | None = None):

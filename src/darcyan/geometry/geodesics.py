@@ -116,14 +116,15 @@ def interpolate(mesh: Mesh, values: np.ndarray, faces: np.ndarray, bary: np.ndar
 
 
 def vertex_normals(mesh: Mesh) -> np.ndarray:
-    """``(n, 3)`` unit area-weighted vertex normals (outward for an outward-oriented mesh)."""
-    v, f = mesh.vertices, mesh.faces
-    face_n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])  # length = 2 * area
-    corners = f.ravel()
-    normals = np.stack([np.bincount(corners, weights=np.repeat(face_n[:, k], 3), minlength=len(v))
-                        for k in range(3)], axis=1)  # sum of the adjacent faces' area vectors
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    return normals / np.where(length == 0, 1.0, length)
+    """``(n, 3)`` unit area-weighted vertex normals (outward for an outward-oriented mesh): the
+    normalized sum of the adjacent faces' area vectors; 0 where that sum is 0 (an unreferenced
+    vertex, or one with zero-area faces only)."""
+    import igl  # lazily: igl imports scipy
+
+    # AREA named, though libigl's DEFAULT is area too: its ANGLE weighting would change the normals.
+    normals = igl.per_vertex_normals(mesh.vertices, mesh.faces, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA)
+    normals[~np.isfinite(normals).all(axis=1)] = 0.0  # libigl's 0 / 0
+    return normals
 
 
 def vertex_gradient(mesh: Mesh, field: np.ndarray, vertex: int) -> np.ndarray:

@@ -1,5 +1,17 @@
-"""Discrete differential operators of a triangle mesh: corner cotangents, Meyer's mixed
-Voronoi areas and the cotangent Laplacian (Meyer, Desbrun, Schroeder and Barr 2003)."""
+"""Discrete differential operators of a triangle mesh: Meyer's mixed Voronoi areas and the
+cotangent Laplacian (Meyer, Desbrun, Schroeder and Barr 2003), computed by libigl.
+
+libigl's ``cotmatrix`` (negative semidefinite, as before) and ``massmatrix(...,
+MASSMATRIX_TYPE_VORONOI)`` equal the formulas written out (``tests/test_operators.py``) and the
+hand-written code they replace to rounding (1e-13 of the largest entry on TOSCA meshes), obtuse
+triangles included (1/2 of the face to the obtuse corner, 1/4 to the others). They differ only on
+what a prepared mesh never holds: a
+zero-area face gives libigl inf or NaN (it divides by the area or an edge length) where the
+formulas give nothing, so such faces are left out; and libigl sizes the mass matrix by the
+largest vertex index in the faces, so trailing unreferenced vertices get their zero area back.
+
+``igl`` is imported inside the functions: it imports scipy, which a cached match must not.
+"""
 
 from __future__ import annotations
 
@@ -13,63 +25,34 @@ if TYPE_CHECKING:
     import scipy.sparse as sp
 
 
-def _corner_geometry(mesh: Mesh):
-    v, f = mesh.vertices, mesh.faces
-    # Edge opposite corner i of each face, and the corner angles' cotangents.
-    e = [v[f[:, (i + 2) % 3]] - v[f[:, (i + 1) % 3]] for i in range(3)]  # e[i] opposite corner i
-    double_area = np.linalg.norm(np.cross(e[0], e[1]), axis=1)
-    safe = np.where(double_area > 0, double_area, np.inf)
-    cot = np.empty((len(f), 3))
-    angles = np.empty((len(f), 3))
-    for i in range(3):
-        u = e[(i + 2) % 3]  # from corner i to the next corner
-        w = -e[(i + 1) % 3]  # from corner i to the previous corner
-        dot = np.einsum("ij,ij->i", u, w)
-        cot[:, i] = dot / safe
-        angles[:, i] = np.arctan2(double_area, dot)
-    sq_len = np.stack([np.einsum("ij,ij->i", e[i], e[i]) for i in range(3)], axis=1)
-    return cot, angles, sq_len, 0.5 * double_area
-
-
 def mixed_voronoi_area(mesh: Mesh) -> np.ndarray:
     """``(n,)`` Meyer's mixed area: Voronoi for non-obtuse triangles, else 1/2 or 1/4 of the face."""
-    return _mixed_area(mesh, *_corner_geometry(mesh))
+    import igl  # lazily: igl imports scipy
 
-
-def _mixed_area(mesh: Mesh, cot, angles, sq_len, area) -> np.ndarray:
-    """:func:`mixed_voronoi_area` from the corner geometry already computed."""
-    f = mesh.faces
-    # Voronoi share of corner i: (|e_{i+1}|^2 cot(angle i+1) + |e_{i+2}|^2 cot(angle i+2)) / 8,
-    # e_j being the edge opposite corner j (so e_{i+1}, e_{i+2} are the edges at corner i).
-    share = np.empty_like(cot)
-    for i in range(3):
-        j, k = (i + 1) % 3, (i + 2) % 3
-        share[:, i] = (sq_len[:, j] * cot[:, j] + sq_len[:, k] * cot[:, k]) / 8.0
-    obtuse = angles > np.pi / 2
-    any_obtuse = obtuse.any(axis=1)
-    share[any_obtuse] = (area[any_obtuse, None] / 4.0) * np.ones(3)
-    share[obtuse] = (area[:, None] / 2.0 * np.ones(3))[obtuse]
-    return np.bincount(f.ravel(), weights=share.ravel(), minlength=mesh.n_vertices)
+    area = igl.massmatrix(mesh.vertices, mesh.faces, igl.MASSMATRIX_TYPE_VORONOI).diagonal()
+    if not np.isfinite(area).all():  # a face with coincident corners (NaN cosines)
+        area = igl.massmatrix(mesh.vertices, nondegenerate_faces(mesh), igl.MASSMATRIX_TYPE_VORONOI).diagonal()
+    if len(area) < mesh.n_vertices:  # libigl's matrix ends at the last vertex used by a face
+        area = np.concatenate([area, np.zeros(mesh.n_vertices - len(area))])
+    return area
 
 
 def cotangent_laplacian(mesh: Mesh) -> sp.csr_matrix:
     """``(n, n)`` L with ``(L x)_i = sum_j (cot a_ij + cot b_ij) / 2 * (x_j - x_i)`` (negative semidefinite)."""
-    return _cotangent_matrix(mesh, _corner_geometry(mesh)[0])
+    import igl  # lazily: igl imports scipy
+
+    laplacian = igl.cotmatrix(mesh.vertices, mesh.faces)
+    if not np.isfinite(laplacian.data).all():  # a zero-area face: libigl divides by its area
+        laplacian = igl.cotmatrix(mesh.vertices, nondegenerate_faces(mesh))
+    return laplacian.tocsr()
 
 
-def _cotangent_matrix(mesh: Mesh, cot: np.ndarray) -> sp.csr_matrix:
-    """:func:`cotangent_laplacian` from the corner cotangents ``(m, 3)`` already computed."""
-    import scipy.sparse as sp  # lazily: a cached match imports no scipy
-
-    f = mesh.faces
-    n = mesh.n_vertices
-    # Corner i's cotangent weights the edge opposite it, (f[:, i+1], f[:, i+2]), both ways; the
-    # diagonal holds minus each row's sum. One COO assembly, duplicates summed by tocsr().
-    a, b = f[:, [1, 2, 0]].ravel(), f[:, [2, 0, 1]].ravel()
-    half = cot.ravel() / 2
-    weight_sum = np.bincount(a, weights=half, minlength=n) + np.bincount(b, weights=half, minlength=n)
-    diagonal = np.arange(n)
-    rows = np.concatenate([a, b, diagonal])
-    cols = np.concatenate([b, a, diagonal])
-    vals = np.concatenate([half, half, -weight_sum])
-    return sp.coo_matrix((vals, (rows, cols)), shape=(n, n)).tocsr()
+def nondegenerate_faces(mesh: Mesh, keep_collinear: bool = False) -> np.ndarray:
+    """The faces of nonzero area (``keep_collinear``: also those of zero area whose three corners
+    are distinct points): libigl gives inf or NaN on the others, which add nothing to an
+    operator's sum (no cotangent, area or normal; their angles are all 0)."""
+    v, f = mesh.vertices, mesh.faces
+    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    if keep_collinear:
+        return f[(a != b).any(axis=1) & (b != c).any(axis=1) & (c != a).any(axis=1)]
+    return f[np.linalg.norm(np.cross(b - a, c - a), axis=1) > 0]
