@@ -128,17 +128,15 @@ def _load(path: str):
 
 
 def _prepared(path: str, meter: StageMeter):
-    """Load and prepare (checks, largest component, normalization), as darcyan does."""
-    from darcyan.geometry.mesh import normalize_mesh
-    from darcyan.geometry.repair import prepare_mesh
+    """Load and prepare (checks, largest component, denoising, normalization), as darcyan does."""
+    from darcyan.geometry.shape import prepare_shape
 
     meter.start("load")
     mesh = _load(path)
     meter.start("prepare")
-    prepared, _ = prepare_mesh(mesh)
-    normalized, _ = normalize_mesh(prepared)
+    shape = prepare_shape(mesh)
     meter.stop()
-    return normalized
+    return shape.mesh
 
 
 def _features_in(mesh, input_vertices) -> "list[int]":
@@ -199,6 +197,7 @@ def child_spectral(task: dict) -> dict:
 
 def child_pyfm(task: dict) -> dict:
     """pyfmaps' dense pipeline: its eigenpairs, WKS, functional map + ZoomOut, point map."""
+    from darcyan.dense import pyfm
     from darcyan.eval import baselines
 
     start_wall, start_cpu = time.perf_counter(), time.process_time()
@@ -208,7 +207,7 @@ def child_pyfm(task: dict) -> dict:
     for path in task["files"]:
         mesh = _prepared(path, meter)
         meter.start("spectrum")
-        spectra.append(baselines.pyfm_spectrum(mesh))
+        spectra.append(pyfm.pyfm_spectrum(mesh, pyfm.README_PIPELINE.spectrum))
         meter.stop()
         meshes.append(mesh)
         _accumulate(stages, meter.stages)

@@ -17,8 +17,6 @@ from darcyan.dense.maps import (
     consistent_landmarks,
     dense_map,
     dense_map_to_csv,
-    nearest_rows,
-    surface_sample,
 )
 from darcyan.errors import ConfigError, DarcyanError
 from darcyan.eval.dense_scores import evaluate_dense
@@ -135,20 +133,6 @@ def test_consistent_landmarks_keeps_the_largest_agreeing_set():
     x2[7] = 1000.0
     d1, d2 = np.abs(x1[:, None] - x1), np.abs(x2[:, None] - x2)
     assert consistent_landmarks(d1, d2, 0.1, 0.0).tolist() == [i for i in range(len(x1)) if i != 7]
-
-
-@pytest.mark.parametrize("dim", [3, 40])
-def test_nearest_rows_agrees_with_brute_force(dim):
-    rng = np.random.default_rng(dim)
-    reference, queries = rng.normal(size=(500, dim)), rng.normal(size=(200, dim))
-    expected = np.argmin(((queries[:, None, :] - reference[None]) ** 2).sum(axis=2), axis=1)
-    assert np.array_equal(nearest_rows(reference, queries), expected)
-
-
-def test_surface_sample_is_distinct_sorted_and_seeded(sphere):
-    a, b = surface_sample(sphere, 300, seed=1), surface_sample(sphere, 300, seed=1)
-    assert np.array_equal(a, b) and len(np.unique(a)) == 300 and np.all(np.diff(a) > 0)
-    assert len(surface_sample(sphere, 10**6)) == sphere.n_vertices
 
 
 def test_errors_name_the_problem(figure_pair):

@@ -7,8 +7,8 @@ import pytest
 from conftest import noisy_copy
 
 from darcyan import MeshError, MeshWarning
-from darcyan.geometry import synthetic
 from darcyan.config import Denoising
+from darcyan.geometry import synthetic
 from darcyan.geometry.denoise import denoise_mesh, surface_roughness, taubin_smooth
 from darcyan.geometry.mesh import Mesh, normalize_mesh
 from darcyan.geometry.repair import prepare_mesh

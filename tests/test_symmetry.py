@@ -125,63 +125,6 @@ def test_true_matching_ranked_below_the_eighth_candidate_is_still_found(tosca, t
         assert correct_matches(tosca / "tosca-5k", a, b, cache, every_match) == (6, 6), (a, b)
 
 
-def test_test_points_are_drawn_uniformly_over_the_area_not_the_vertices():
-    from darcyan.geometry.operators import mixed_voronoi_area
-    from darcyan.method.symmetry import OrientedSurface, surface_samples
-
-    # A unit square whose vertex columns crowd toward x = 0 (x = t^2): 71% of the vertices lie
-    # left of x = 0.5, half of the area does.
-    t = np.linspace(0.0, 1.0, 60)
-    x, y = np.meshgrid(t**2, t, indexing="ij")
-    vertices = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1)
-    idx = np.arange(x.size).reshape(x.shape)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
-    square = Mesh(vertices, np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]))
-    normals = np.tile([0.0, 0.0, 1.0], (x.size, 1))
-    by_area = OrientedSurface(vertices, normals, np.zeros((0, x.size)), areas=mixed_voronoi_area(square))
-    by_vertex = OrientedSurface(vertices, normals, np.zeros((0, x.size)))
-    rng = np.random.default_rng(0)
-    left = lambda s: float((vertices[surface_samples(s, 800, rng), 0] < 0.5).mean())  # noqa: E731
-    assert abs(left(by_area) - 0.5) < 0.05
-    assert abs(left(by_vertex) - np.sqrt(0.5)) < 0.05
-
-
-@pytest.mark.parametrize("dim", [3, 8, 11])
-def test_nearest_points_equals_a_kd_tree(dim):
-    from scipy.spatial import cKDTree
-
-    from darcyan.method.symmetry import nearest_points
-
-    rng = np.random.default_rng(dim)
-    # Far from the origin (large |p|^2 against small gaps: the screening's worst case), float32
-    # input like the cached distance fields, and queries exactly on points.
-    points = (50.0 + rng.random((3000, dim))).astype(np.float32)
-    queries = np.vstack([50.0 + rng.random((300, dim)), points[:40]]).astype(np.float32)
-    expected_distance, _ = cKDTree(points).query(queries)
-    found = nearest_points(points, queries)
-    distance = np.linalg.norm(queries.astype(np.float64) - points[found].astype(np.float64), axis=1)
-    np.testing.assert_array_equal(distance, expected_distance)
-    np.testing.assert_array_equal(found[300:], np.arange(40))
-
-
-def test_nearest_points_breaks_ties_by_the_smallest_index():
-    from darcyan.method.symmetry import nearest_points
-
-    points = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 5.0], [0.0, 0.0]])
-    queries = np.array([[1.0, 0.0], [0.1, 0.0], [0.0, 0.0]])  # 0 and 1 tie; 0 and 3 coincide
-    np.testing.assert_array_equal(nearest_points(points, queries), [0, 0, 0])
-
-
-def test_nearest_neighbours_equal_a_kd_tree():
-    from scipy.spatial import cKDTree
-
-    from darcyan.method.symmetry import nearest_neighbours
-
-    points = np.random.default_rng(1).random((500, 3))
-    expected = cKDTree(points).query(points, k=7)[1][:, 1:]
-    np.testing.assert_array_equal(nearest_neighbours(points, 6), expected)
-
-
 def test_a_cached_match_imports_no_scipy(tmp_path):
     """The warm path's budget (0.5 s for a second match) has no room for scipy's 0.3 s import."""
     import os

@@ -3,6 +3,8 @@ counted), and the drawn geometry against what is known of it (level curves on a 
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -222,8 +224,15 @@ def test_cli_show_grid_and_match_plot(poses, tmp_path, capsys, monkeypatch):
     assert (tmp_path / "plain.csv").read_text() == (tmp_path / "pictured.csv").read_text()
     assert (tmp_path / "m.png").stat().st_size > 10_000
     capsys.readouterr()
-    assert main(["match", str(files[0]), str(files[1]), "--truth", "identity"]) == 2
-    assert "--plot" in capsys.readouterr().err
+    # --truth alone scores the matches on stderr (the figure's poses share one numbering)
+    assert main(["match", str(files[0]), str(files[1]), "-o", str(tmp_path / "scored.csv"), "--truth", "identity"]) == 0
+    said = capsys.readouterr().err
+    assert re.search(r"darcyan: (\d+) of \1 matches correct", said), said
+    # identity between files of different vertex counts is refused, not drawn as all wrong
+    coarse = tmp_path / "coarse.off"
+    save_mesh(synthetic.figure(1, subdivisions=SUBDIVISIONS - 1), coarse)
+    assert main(["match", str(files[0]), str(coarse), "--truth", "identity"]) == 2
+    assert "identity needs one vertex numbering" in capsys.readouterr().err
     assert main(["show-grid", str(files[0]), "--feature", "99", "-o", str(tmp_path / "x.png")]) == 2
     assert "out of range" in capsys.readouterr().err
     assert main(["show-grid", str(files[0]), "-o", str(tmp_path / "no" / "x.png")]) == 2

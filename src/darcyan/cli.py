@@ -112,21 +112,22 @@ def cmd_match(args: argparse.Namespace) -> int:
     if args.jobs < 1:
         raise DarcyanError(f"--jobs must be at least 1, got {args.jobs}")
     cache = _cache(args)
-    truth = None
     if args.truth:
-        if not (args.plot or args.html):
-            raise DarcyanError("--truth marks wrong matches in the pictures: give --plot and/or --html too")
-        from .viz.scenes import read_truth
+        from .eval.metrics import read_truth, score_matches
 
-        truth = read_truth(args.truth)
+        read_truth(args.truth)  # a malformed spec or file fails before any computation
     _picture_dependencies(args)
     description_1, description_2 = describe_shapes([args.source, args.target], config, args.repair, cache, args.jobs)
     _note_changes(description_1)
     _note_changes(description_2)
     correspondence = match_shapes(description_1, description_2, config)
-    shapes = None
-    if args.dense or args.plot or args.html:  # the prepared shapes, once for the dense map and the pictures
+    shapes = score = None
+    if args.dense or args.plot or args.html or args.truth:  # prepared once for the dense map, score and pictures
         shapes = [load_shape(path, config, args.repair, warn=False) for path in (args.source, args.target)]
+    if args.truth:
+        truth = read_truth(args.truth, description_1.n_input_vertices, description_2.n_input_vertices)
+        score = score_matches(shapes[0], shapes[1], correspondence, truth)
+        print(f"darcyan: {score.summary()}", file=sys.stderr)
     if args.dense:
         from .dense.maps import UNMAPPED, dense_map, dense_map_to_csv
 
@@ -141,7 +142,7 @@ def cmd_match(args: argparse.Namespace) -> int:
     if args.plot or args.html:
         from .viz.scenes import match_scene
 
-        scene = match_scene(shapes[0], shapes[1], correspondence, truth, config, args.repair)
+        scene = match_scene(shapes[0], shapes[1], correspondence, config=config, score=score)
         _pictures(scene, args.plot, args.html, "render_matches", "matches_html")
     return 0
 
@@ -263,8 +264,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "is in the cache (default %(default)s)")
     p.add_argument("--plot", metavar="FILE.png", help="also draw the matches side by side to a PNG (pip install 'darcyan[plot]')")
     p.add_argument("--html", metavar="FILE.html", help="also write an interactive, self-contained HTML view (pip install 'darcyan[html]')")
-    p.add_argument("--truth", metavar="identity|A.vts,B.vts", help="ground truth for the pictures: mark wrong matches "
-                   "(geodesic error > 0.05 sqrt(area)); 'identity' = same vertex numbering")
+    p.add_argument("--truth", metavar="identity|A.vts,B.vts", help="ground truth: print 'k of n matches correct' "
+                   "(geodesic error <= 0.05 sqrt(area)) on stderr and mark wrong matches in the pictures; 'identity' = "
+                   "the same vertex numbering (same vertex counts)")
     _add_config_options(p)
     p.set_defaults(func=cmd_match)
 

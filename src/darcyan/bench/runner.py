@@ -54,6 +54,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import DarcyanConfig
+from ..dense import pyfm
 from ..errors import DarcyanError, require
 from ..eval.dense_scores import DENSE_SAMPLE, DENSE_SEED
 from ..eval.metrics import (
@@ -69,6 +70,7 @@ from ..eval.metrics import (
 from ..geometry import spectral as lbo
 from ..geometry.shape import Shape
 from ..io.cache import ShapeCache, code_digest, file_digest
+from ..parallel import process_map
 
 METHODS = ("darcyan", "hks", "wks", "pyfm")
 DENSE_METHODS = ("darcyan", "pyfm")  # dense maps of --dense (pyfm only when it is among the methods)
@@ -221,19 +223,18 @@ class BenchSettings:
 
         return {"samples": self.dense_samples, "seed": self.dense_seed,
                 "config": dataclasses.asdict(dense.DenseConfig()),
-                "pyfm": {"fmap_size": dense.PYFM_FMAP_SIZE, "final_basis": dense.PYFM_FINAL_BASIS,
-                         "zoomout_step": dense.PYFM_ZOOMOUT_STEP, "descriptors": dense.PYFM_DESCRIPTORS,
-                         "subsample_step": dense.PYFM_SUBSAMPLE_STEP, "weights": dict(dense.PYFM_WEIGHTS)}}
+                "pyfm": dataclasses.asdict(pyfm.DENSE_PIPELINE)}
 
     def as_dict(self) -> dict:
+        import dataclasses
+
         from ..eval import baselines
 
         return {"methods": list(self.methods), "threshold": self.threshold, "config": self.config.as_dict(),
                 "laplacian": self.laplacian, "repair": self.repair, "dense": self.dense_settings(),
                 "baselines": {"spectrum_size": lbo.SPECTRUM_SIZE,
                               "signature_samples": baselines.SIGNATURE_SAMPLES,
-                              "pyfm_spectrum": baselines.PYFM_SPECTRUM, "pyfm_k": baselines.PYFM_K,
-                              "pyfm_zoomout_steps": baselines.PYFM_ZOOMOUT_STEPS}}
+                              "pyfm": dataclasses.asdict(pyfm.README_PIPELINE)}}
 
     def comparable(self) -> dict:
         """The settings that must match for resumed results to be reused (not the method list;
@@ -328,7 +329,7 @@ def _shape_work(task: dict) -> dict:
             seconds[method] = time.perf_counter() - start
     if "pyfm" in settings.methods and cache is not None:
         start = time.perf_counter()
-        _cached(cache, (digest, "pyfm-spectrum", str(baselines.PYFM_SPECTRUM), f"repair={repair}",
+        _cached(cache, (digest, "pyfm-spectrum", str(pyfm.README_PIPELINE.spectrum), f"repair={repair}",
                         settings.config.prepare_fingerprint()),
                 lambda: _pyfm_spectrum_arrays(prepared_shape(path, repair, settings.config).mesh))
         seconds["pyfm"] = time.perf_counter() - start
@@ -354,9 +355,7 @@ def _spectrum_arrays(shape: Shape, laplacian: str) -> dict:
 
 
 def _pyfm_spectrum_arrays(mesh) -> dict:
-    from ..eval import baselines
-
-    values, vectors = baselines.pyfm_spectrum(mesh)
+    values, vectors = pyfm.pyfm_spectrum(mesh, pyfm.README_PIPELINE.spectrum)
     return {"values": values, "vectors": vectors.astype(np.float32)}
 
 
@@ -577,7 +576,7 @@ def _pyfm_map(job: dict, source: Shape, target: Shape) -> np.ndarray:
     cache = _cache_of(job)
     spectra = []
     for name, shape in ((job["source_path"], source), (job["target_path"], target)):
-        arrays, _ = _cached(cache, (file_digest(name), "pyfm-spectrum", str(baselines.PYFM_SPECTRUM),
+        arrays, _ = _cached(cache, (file_digest(name), "pyfm-spectrum", str(pyfm.README_PIPELINE.spectrum),
                                     f"repair={job['settings'].repair}", job["settings"].config.prepare_fingerprint()),
                             lambda: _pyfm_spectrum_arrays(shape.mesh))
         spectra.append((arrays["values"], arrays["vectors"]))
@@ -622,30 +621,7 @@ def run_tasks(function, tasks: list, jobs: int = 1, scheduler: str | None = None
         for task in tasks:
             yield function(task)
         return
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
-    saved = {k: os.environ.get(k) for k in THREAD_VARIABLES}
-    for k in THREAD_VARIABLES:  # one BLAS thread per worker: the workers already fill the cores
-        os.environ.setdefault(k, "1")
-    try:
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-            futures = [pool.submit(function, task) for task in tasks]
-            try:
-                for future in as_completed(futures):
-                    yield future.result()
-            finally:
-                for future in futures:
-                    future.cancel()
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
-
-
-THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+    yield from process_map(function, tasks, jobs)
 
 
 class Progress:

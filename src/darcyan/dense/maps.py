@@ -31,21 +31,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ConfigError, DarcyanError, require
+from ..errors import ConfigError, DarcyanError
+from ..geometry.knn import nearest_rows
 from ..geometry.mesh import Mesh
-from ..geometry.spectral import laplace_beltrami_spectrum
+from ..geometry.sampling import sample_vertices
+from .pyfm import DENSE_PIPELINE, pyfm_point_map
 
 LANDMARK_MODES = ("consistent", "all")
 METHODS = ("zoomout", "pyfm")
-# method="pyfm": pyFM's pipeline (WKS plus landmark-centred WKS, Laplacian and descriptor
-# commutativity) with these sizes, then its ZoomOut; the weights are its README's.
-PYFM_FMAP_SIZE, PYFM_FINAL_BASIS, PYFM_ZOOMOUT_STEP = 50, 200, 10
-PYFM_DESCRIPTORS, PYFM_SUBSAMPLE_STEP = 100, 5
-PYFM_WEIGHTS = {"w_descr": 1e0, "w_lap": 1e-2, "w_dcomm": 1e-1}
 UNMAPPED = -1  # source vertices the analysis left out (outside the largest component)
-# Nearest-neighbour search: a k-d tree up to this dimension, chunked brute force above it.
-KDTREE_MAX_DIM = 16
-NN_CHUNK_BYTES = 128 * 2**20
 # Shift of the shift-invert eigen solver (just below the zero eigenvalue of the Laplacian).
 EIGSH_SHIFT = -1e-8
 MIN_LANDMARKS = 3
@@ -77,6 +71,7 @@ class DenseConfig:
         bijectivity, orthogonality: weights of the bijectivity (``C_12 C_21 ~ I``) and
             orthogonality (area preservation) terms beside the coupling term in ZoomOut's
             nearest-neighbour searches (0 and 0 = plain ZoomOut).
+        seed: seed of the surface samples.
     """
 
     method: str = "zoomout"
@@ -89,6 +84,7 @@ class DenseConfig:
     zoomout_samples: int = 3000
     bijectivity: float = 1.0
     orthogonality: float = 1.0
+    seed: int = 0
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -194,41 +190,15 @@ def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float
 # Spectral basis and nearest neighbours
 
 
+def _surface_sample(shape, config: DenseConfig) -> np.ndarray:
+    """``(zoomout_samples,)`` vertices drawn by area (seed ``config.seed``), sorted."""
+    return np.sort(sample_vertices(shape.mesh.n_vertices, config.zoomout_samples, np.random.default_rng(config.seed),
+                                   shape.vertex_areas))
+
+
 def _basis(shape, size: int) -> np.ndarray:
     """``(n, size)`` the shape's Laplace-Beltrami eigenvectors (built once per shape)."""
     return shape.spectrum(min(size, shape.mesh.n_vertices - 1), shift=EIGSH_SHIFT).vectors
-
-
-def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
-    """``(q,) int64``: for each row of ``queries (q, d)``, the nearest row of ``reference (n, d)``.
-
-    A k-d tree in few dimensions; in many, brute force in single precision by chunks of queries
-    (memory ``chunk x n``, never ``q x n``).
-    """
-    reference = np.ascontiguousarray(reference, dtype=np.float64)
-    queries = np.ascontiguousarray(queries, dtype=np.float64)
-    if reference.shape[1] <= KDTREE_MAX_DIM:
-        from scipy.spatial import cKDTree
-
-        return cKDTree(reference).query(queries)[1].astype(np.int64)
-    reference, queries = reference.astype(np.float32), queries.astype(np.float32)
-    ref_sq = np.einsum("ij,ij->i", reference, reference)
-    chunk = max(1, NN_CHUNK_BYTES // (4 * len(reference)))
-    out = np.empty(len(queries), dtype=np.int64)
-    for start in range(0, len(queries), chunk):
-        q = queries[start:start + chunk]
-        out[start:start + chunk] = np.argmin(ref_sq[None, :] - 2.0 * (q @ reference.T), axis=1)
-    return out
-
-
-def surface_sample(mesh: Mesh, count: int, seed: int = 0) -> np.ndarray:
-    """``(count,)`` distinct vertices drawn at random with probability proportional to their
-    area (a uniform sample of the surface; ``numpy.random.default_rng(seed)``), sorted."""
-    if count >= mesh.n_vertices:
-        return np.arange(mesh.n_vertices)
-    weights = np.bincount(mesh.faces.ravel(), weights=np.repeat(mesh.face_areas(), 3), minlength=mesh.n_vertices)
-    weights = weights / weights.sum()
-    return np.sort(np.random.default_rng(seed).choice(mesh.n_vertices, size=count, replace=False, p=weights))
 
 
 # ----------------------------------------------------------------------------------------------
@@ -306,38 +276,15 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     return c_12, c_21
 
 
-def pyfm_map(mesh_1: Mesh, mesh_2: Mesh, landmarks_1: np.ndarray | None = None,
-             landmarks_2: np.ndarray | None = None) -> np.ndarray:
-    """``(n1,)`` vertices of ``mesh_2`` for the vertices of ``mesh_1`` by pyFM (optional extra
-    ``pyfm``): WKS descriptors (plus landmark WKS when landmarks are given), a functional map of
-    size :data:`PYFM_FMAP_SIZE` fitted with Laplacian and descriptor commutativity, ZoomOut up to
-    :data:`PYFM_FINAL_BASIS`. ``landmarks_i (k,)`` local vertex indices, pairwise corresponding;
-    without them this is pyFM's own pipeline (its README's). Both meshes area 1 (as analysed)."""
-    functional = require("pyFM.functional", "pyfm")
-    trimesh = require("pyFM.mesh", "pyfm")
-    # pyFM's map goes from its second mesh to its first: the target is mesh 1 there.
-    model = functional.FunctionalMapping(trimesh.TriMesh(mesh_2.vertices, mesh_2.faces),
-                                         trimesh.TriMesh(mesh_1.vertices, mesh_1.faces))
-    extra = {}
-    if landmarks_1 is not None:
-        extra["landmarks"] = np.stack([landmarks_2, landmarks_1], axis=1)
-    model.preprocess(n_descr=PYFM_DESCRIPTORS, descr_type="WKS", subsample_step=PYFM_SUBSAMPLE_STEP,
-                     k_process=PYFM_FINAL_BASIS, **extra)
-    model.fit(K=(PYFM_FMAP_SIZE, PYFM_FMAP_SIZE), **PYFM_WEIGHTS)
-    refined = model.zoomout_refine(nit=(PYFM_FINAL_BASIS - PYFM_FMAP_SIZE) // PYFM_ZOOMOUT_STEP,
-                                   step=PYFM_ZOOMOUT_STEP)
-    return np.asarray(model.get_p2p(refined), dtype=np.int64)
-
-
 def pyfm_own_map(mesh_1: Mesh, mesh_2: Mesh, n_input_vertices: int | None = None) -> DenseMap:
     """pyFM's own dense pipeline between two analysed meshes, *without* darcyan's landmarks (the
-    baseline of ``darcyan bench --dense``): :func:`pyfm_map` with no landmarks.
+    baseline of ``darcyan bench --dense``): :func:`darcyan.dense.pyfm.pyfm_point_map` with no landmarks.
 
     ``mesh_i``: prepared, area-1 meshes (``ShapeDescription.mesh``); ``n_input_vertices``: of
     the source file (default: from ``mesh_1.input_index``). Returns a :class:`DenseMap` in input
     numbering like :func:`dense_map` (no landmarks; ``timings["pyfm"]``: the whole pipeline)."""
     t = time.perf_counter()
-    local = pyfm_map(mesh_1, mesh_2)
+    local = pyfm_point_map(mesh_1, mesh_2, DENSE_PIPELINE)
     n_input = int(mesh_1.input_index.max()) + 1 if n_input_vertices is None else n_input_vertices
     target = np.full(n_input, UNMAPPED, dtype=np.int64)
     target[mesh_1.input_index] = mesh_2.input_index[local]
@@ -382,7 +329,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         timings["landmarks"] = time.perf_counter() - t
         t = time.perf_counter()
         say("pyfm")
-        local = pyfm_map(shape_1.mesh, shape_2.mesh, src, tgt)
+        local = pyfm_point_map(shape_1.mesh, shape_2.mesh, DENSE_PIPELINE, src, tgt)
         timings["pyfm"] = time.perf_counter() - t
     else:
         map_12 = nearest_rows(fields_2, fields_1)  # (n1,) first maps by geodesic landmark coordinates
@@ -397,8 +344,8 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         say("zoomout")
         mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
         if 0 < config.zoomout_samples < max(mesh_1.n_vertices, mesh_2.n_vertices):
-            sample_1 = surface_sample(mesh_1, config.zoomout_samples)
-            sample_2 = surface_sample(mesh_2, config.zoomout_samples)
+            sample_1 = _surface_sample(shape_1, config)
+            sample_2 = _surface_sample(shape_2, config)
             # The maps restricted to the samples: each image snapped to the nearest sample.
             sub_12 = nearest_rows(mesh_2.vertices[sample_2], mesh_2.vertices[map_12[sample_1]])
             sub_21 = nearest_rows(mesh_1.vertices[sample_1], mesh_1.vertices[map_21[sample_2]])

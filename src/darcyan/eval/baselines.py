@@ -23,7 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ConfigError, require
+from ..dense import pyfm
+from ..errors import ConfigError
 from ..geometry.mesh import Mesh
 from ..geometry.spectral import Spectrum
 
@@ -33,13 +34,6 @@ WKS_VARIANCE = 7.0  # sigma = WKS_VARIANCE * energy step (Aubry et al.)
 WKS_MARGIN = 2.0  # energies start and stop this many sigmas inside the log-spectrum
 SPECTRAL_METHODS = ("hks", "wks")
 
-# pyfmaps pipeline (the parameters of the package's README example).
-PYFM_SPECTRUM = 128  # eigenpairs computed per mesh (pyfmaps' descriptors use up to 128)
-PYFM_DESCRIPTORS = 100  # WKS energies
-PYFM_DESCRIPTOR_STEP = 5  # keep every 5th WKS descriptor
-PYFM_K = 35  # initial functional map size
-PYFM_FIT = {"w_descr": 1.0, "w_lap": 1e-2, "w_dcomm": 1e-1, "w_orient": 0.0}
-PYFM_ZOOMOUT_STEPS = 15  # ZoomOut iterations, one eigenfunction each (35 -> 50)
 
 
 
@@ -84,38 +78,9 @@ def spectral_descriptors(method: str, spectrum: Spectrum, vertices: np.ndarray) 
 # pyfmaps
 
 
-def pyfm_mesh(mesh: Mesh, spectrum: tuple | None = None):
-    """A ``pyFM.mesh.TriMesh`` of ``mesh`` with its operators; ``spectrum`` ``(values, vectors)``
-    from :func:`pyfm_spectrum` avoids recomputing the eigenpairs."""
-    trimesh_module = require("pyFM.mesh", "pyfm")
-    tri = trimesh_module.TriMesh(np.asarray(mesh.vertices), np.asarray(mesh.faces))
-    tri.compute_operators()
-    if spectrum is not None:
-        tri.eigenvalues = np.asarray(spectrum[0], dtype=np.float64)
-        tri.eigenvectors = np.asarray(spectrum[1], dtype=np.float64)
-    return tri
-
-
-def pyfm_spectrum(mesh: Mesh, k: int = PYFM_SPECTRUM) -> tuple[np.ndarray, np.ndarray]:
-    """``(values (k,), vectors (n, k))``: pyfmaps' own eigenpairs of ``mesh`` (for caching)."""
-    tri = pyfm_mesh(mesh)
-    tri.process(k=min(k, mesh.n_vertices - 2))
-    return np.asarray(tri.eigenvalues), np.asarray(tri.eigenvectors)
-
-
 def pyfm_point_map(source: Mesh, target: Mesh, source_spectrum: tuple | None = None,
                    target_spectrum: tuple | None = None) -> np.ndarray:
-    """``(n_source,)`` the target vertex of every source vertex by pyfmaps' functional-map
-    pipeline (WKS descriptors, fitted map, ZoomOut); both meshes prepared and of area 1."""
-    functional = require("pyFM.functional", "pyfm")
-    spectral = require("pyFM.spectral", "pyfm")
-    # pyFM maps mesh2's vertices onto mesh1: mesh1 = target, mesh2 = source.
-    mesh1 = pyfm_mesh(target, target_spectrum)
-    mesh2 = pyfm_mesh(source, source_spectrum)
-    model = functional.FunctionalMapping(mesh1, mesh2)
-    model.preprocess(n_descr=PYFM_DESCRIPTORS, descr_type="WKS", subsample_step=PYFM_DESCRIPTOR_STEP,
-                     k_process=PYFM_SPECTRUM)
-    model.fit(K=(PYFM_K, PYFM_K), **PYFM_FIT)
-    refined = model.zoomout_refine(nit=PYFM_ZOOMOUT_STEPS, step=1)
-    # FunctionalMapping works on copies of the meshes: convert with its own (they hold the spectra).
-    return np.asarray(spectral.mesh_FM_to_p2p(refined, model.mesh1, model.mesh2), dtype=np.int64)
+    """``(n_source,)`` the target vertex of every source vertex by pyfmaps' pipeline at the
+    settings of its README (:data:`darcyan.dense.pyfm.README_PIPELINE`); spectra from
+    :func:`darcyan.dense.pyfm.pyfm_spectrum` save computing them again."""
+    return pyfm.pyfm_point_map(source, target, pyfm.README_PIPELINE, spectra=(source_spectrum, target_spectrum))

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshError
+from ..errors import DarcyanError, MeshError
 from ..geometry.geodesics import GeodesicSolver
 from ..geometry.mesh import Mesh
 
@@ -316,3 +316,88 @@ def mirror_agreement(solver: GeodesicSolver, mirror: np.ndarray, samples: np.nda
             fields[int(m)] = solver.distance(int(m))
         out[i] = fields[int(m)][int(mirror[int(s)])] / scale
     return out
+
+
+# ---------------------------------------------------------------------------------------------
+# The matches of one pair against a ground truth given on the command line
+
+
+def read_truth(spec: str, source_vertices: int | None = None, target_vertices: int | None = None) -> GroundTruth:
+    """Ground truth from a command-line spec: ``identity`` (the two files share one vertex
+    numbering: refused when their vertex counts differ), or ``A.vts,B.vts`` (line i of both files
+    is the same body point; 1-based indices, checked against the vertex counts when given)."""
+    spec = str(spec).strip()
+    if spec == "identity":
+        if source_vertices is not None and target_vertices is not None and source_vertices != target_vertices:
+            raise DarcyanError(f"--truth identity: the source has {source_vertices} vertices and the target "
+                               f"{target_vertices}; identity needs one vertex numbering (give SOURCE.vts,TARGET.vts)")
+        return GroundTruth.identity()
+    parts = [p for p in spec.split(",") if p]
+    if len(parts) != 2:
+        raise DarcyanError(f"--truth: expected 'identity' or 'SOURCE.vts,TARGET.vts', got {spec!r}")
+    a, b = read_vts(parts[0], source_vertices), read_vts(parts[1], target_vertices)
+    if len(a) != len(b):
+        raise MeshError(parts[1], f"{len(b)} samples but {parts[0]} has {len(a)}: the lists must correspond line by line")
+    return GroundTruth(a, b)
+
+
+@dataclass(frozen=True)
+class MatchScore:
+    """Errors of a pair's matches against a ground truth.
+
+    Attributes:
+        errors: ``(k,)`` geodesic distance on the area-1 target from each matched point to the
+            true one (NaN where the truth does not reach the prepared target).
+        true_points: ``(k,)`` the true correspondents as vertices of the prepared target (-1: unknown).
+        threshold: a match is correct when its error is at most this.
+    """
+
+    errors: np.ndarray
+    true_points: np.ndarray
+    threshold: float = DEFAULT_THRESHOLD
+
+    @property
+    def correct(self) -> int:
+        return int((self.errors <= self.threshold).sum())
+
+    def __len__(self) -> int:
+        return len(self.errors)
+
+    def summary(self) -> str:
+        """``"k of n matches correct (error <= 0.05 sqrt(area))"``."""
+        unknown = int(np.isnan(self.errors).sum())
+        tail = f"; {unknown} without a known true correspondent" if unknown else ""
+        return f"{self.correct} of {len(self)} matches correct (error <= {self.threshold:g} sqrt(area){tail})"
+
+
+def score_matches(source, target, correspondence, truth: GroundTruth,
+                  threshold: float = DEFAULT_THRESHOLD) -> MatchScore:
+    """Score ``correspondence`` (vertices in the files' numbering) from prepared shape ``source``
+    to ``target`` (:class:`~darcyan.geometry.shape.Shape`) against ``truth``. The true
+    correspondent of a matched source point is, for ``.vts`` truth, that of the geodesically
+    nearest listed source sample (the same rule as ``darcyan bench``)."""
+    if truth.source_samples is None:
+        if source.n_input_vertices != target.n_input_vertices:
+            raise MeshError(target.name, f"identity ground truth needs one vertex numbering: the source has "
+                                         f"{source.n_input_vertices} vertices, this file {target.n_input_vertices}")
+        true_input = np.asarray(correspondence.source_vertex, dtype=np.int64)
+    else:
+        for samples, shape in ((truth.source_samples, source), (truth.target_samples, target)):
+            if len(samples) and int(samples.max()) >= shape.n_input_vertices:
+                raise MeshError(shape.name, f"ground-truth vertex {int(samples.max()) + 1} (1-based) out of range "
+                                            f"1..{shape.n_input_vertices}")
+        listed = source.mesh_index(truth.source_samples)
+        on_mesh = listed >= 0
+        if not on_mesh.any():
+            raise MeshError(source.name, "no ground-truth sample lies on the prepared mesh")
+        points = source.mesh_index(correspondence.source_vertex)
+        nearest = nearest_samples(source.solver, points, listed[on_mesh])
+        true_input = truth.target_samples[on_mesh][nearest]
+    true_points = target.mesh_index(true_input)
+    matched = target.mesh_index(correspondence.target_vertex)
+    errors = np.full(len(true_points), np.nan)
+    scale = np.sqrt(target.mesh.area())
+    for i, (q, q_true) in enumerate(zip(matched, true_points)):
+        if q_true >= 0 and q >= 0:
+            errors[i] = target.solver.distance(int(q_true))[q] / scale
+    return MatchScore(errors, true_points, threshold)

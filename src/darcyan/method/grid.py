@@ -33,7 +33,6 @@ from ..geometry.geodesics import (
 from ..geometry.mesh import Mesh
 
 
-
 @dataclass(frozen=True)
 class DarcyanGrid:
     """The intersection points of one Darcyan coordinate system, at full (interpolated) resolution.

@@ -26,6 +26,7 @@ from ..geometry.mesh import Mesh, MeshWarning
 from ..geometry.shape import Shape, prepare_shape
 from ..io.cache import ShapeCache, code_digest, file_digest
 from ..io.mesh_files import load_mesh
+from ..parallel import process_map
 from .descriptors import angular_profiles, curvature_descriptors
 from .features import (
     AGD,
@@ -312,15 +313,9 @@ def describe_shapes(sources: list, config: DarcyanConfig = DarcyanConfig(), repa
     todo = [i for i, r in enumerate(results) if r is None]
     if jobs <= 1 or len(todo) <= 1:
         return [r if r is not None else describe_shape(p, config, repair, cache) for r, p in zip(results, paths)]
-    import concurrent.futures
-    import multiprocessing
+    import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the workers fork)
 
-    import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the fork)
-
-    # fork: the workers start with darcyan already imported (a fresh interpreter costs ~0.4 s)
-    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
-    with concurrent.futures.ProcessPoolExecutor(min(jobs, len(todo)), multiprocessing.get_context(method)) as pool:
-        made = list(pool.map(_describe_arrays, [(paths[i], config, repair) for i in todo]))
+    made = list(process_map(_describe_arrays, [(paths[i], config, repair) for i in todo], jobs, ordered=True))
     for i, (arrays, said) in zip(todo, made):
         for message in said:
             warnings.warn(message, MeshWarning, stacklevel=2)
@@ -332,13 +327,8 @@ def describe_shapes(sources: list, config: DarcyanConfig = DarcyanConfig(), repa
 
 def _describe_arrays(task: tuple) -> tuple:
     """In a worker process: the cacheable arrays of one file and the mesh warnings it raised."""
-    from threadpoolctl import threadpool_limits
-
     path, config, repair = task
-    # One BLAS thread per worker: the workers already fill the cores, and a forked worker keeps
-    # the parent's BLAS thread pool (2 workers x 2 OpenBLAS threads made the heat kernel's
-    # eigensolver, and with it `darcyan match` on the 52k humans, 1.5 to 3 times slower).
-    with warnings.catch_warnings(record=True) as caught, threadpool_limits(1):
+    with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", MeshWarning)
         arrays = analyze_mesh(load_mesh(path), config, repair).description.arrays()
     return arrays, [str(w.message) for w in caught if issubclass(w.category, MeshWarning)]

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import HeatKernel, MirrorTest
+from ..geometry.knn import nearest_neighbours, nearest_points
+from ..geometry.sampling import sample_vertices
 
 # The test's settings (sample counts, weights, the handedness levels, ...) are DarcyanConfig.mirror:
 # :class:`darcyan.config.MirrorTest`, where each is documented with how it was chosen.
@@ -158,12 +160,12 @@ def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface,
     # Drawn by area: TOSCA's full-resolution humans carry most vertices in the face and hands
     # (vertex areas span a factor of 1000), and a draw by vertex left the torso and limbs,
     # where a left/right swap shows, almost untested.
-    drawn = surface_samples(surface_1, test.samples, rng)
+    drawn = sample_vertices(len(surface_1.points), test.samples, rng, surface_1.areas)
     n2 = len(surface_2.points)
     # Images are looked for among at most test.target_points vertices: far finer than the test
     # triangles, and a 52k-vertex target costs no more than a 10k one.
     many = n2 > test.target_points
-    targets = np.sort(surface_samples(surface_2, test.target_points, rng)) if many else np.arange(n2)
+    targets = np.sort(sample_vertices(n2, test.target_points, rng, surface_2.areas)) if many else np.arange(n2)
     near = nearest_neighbours(surface_1.points[drawn], min(test.neighbours, len(drawn) - 1))
     return MirrorTestPoints(drawn, targets, near)
 
@@ -199,17 +201,6 @@ def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface
     return float(votes.mean()) if len(votes) else 0.0
 
 
-def surface_samples(surface: OrientedSurface, count: int, rng: np.random.Generator) -> np.ndarray:
-    """``(min(count, n),)`` distinct vertices drawn in proportion to ``surface.areas`` (uniformly
-    over the surface), or uniformly over the vertices when the areas are not known."""
-    n = len(surface.points)
-    p = None
-    if surface.areas is not None:
-        p = np.asarray(surface.areas, dtype=np.float64)
-        p = p / p.sum()
-    return rng.choice(n, size=min(count, n), replace=False, p=p)
-
-
 def _corner_sine(points, normals, p, q, r) -> np.ndarray:
     """Signed sine of the corner at p of triangles (p, q, r) about ``normals`` (one per triangle,
     the normal at p)."""
@@ -219,61 +210,3 @@ def _corner_sine(points, normals, p, q, r) -> np.ndarray:
     denom = np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(denom > 0, np.einsum("ij,ij->i", cross, normals) / denom, 0.0)
-
-
-# Nearest-neighbour searches in numpy, not scipy.spatial: importing that costs more (0.3 s) than
-# a cached match's whole work, and the sets here are small (800 queries, <= 10k points).
-QUERY_BLOCK = 64  # queries per block: a (64, 10k) block of distances, 5 MB, reused
-# Multiple of the float64 unit roundoff that bounds the error of the screened distances (their
-# exact bound is a few units times (d + 3)); any point within it of the minimum is measured again.
-SCREEN_SLACK = 64
-
-
-def nearest_points(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
-    """``(q,)`` index of the point of ``points`` ``(n, d)`` nearest to each row of ``queries``
-    ``(q, d)`` in Euclidean distance, exactly (ties: the smallest index).
-
-    Squared distances are screened as ``|p|^2 - 2 q.p`` (one matrix product per block of
-    queries, about 2x a k-d tree's time here); a query whose runner-up lies within the product's
-    rounding of its minimum is settled by measuring ``|p - q|^2`` directly.
-    """
-    points = np.asarray(points, dtype=np.float64)
-    queries = np.asarray(queries, dtype=np.float64)
-    centre = points.mean(axis=0)  # centred, the products' rounding is smaller
-    p = points - centre
-    p_sq = np.einsum("ij,ij->i", p, p)
-    right = np.vstack([p.T, p_sq])  # (d + 1, n): [-2 q, 1] @ right = |p|^2 - 2 q.p
-    reach = float(np.sqrt(p_sq.max(initial=0.0)))
-    unit = SCREEN_SLACK * (points.shape[1] + 3) * float(np.finfo(np.float64).eps)
-    block = np.empty((min(QUERY_BLOCK, len(queries)), len(points)))  # reused: no fresh pages per block
-    out = np.empty(len(queries), np.int64)
-    for start in range(0, len(queries), QUERY_BLOCK):
-        q = queries[start:start + QUERY_BLOCK]
-        qc = q - centre
-        rows = np.arange(len(q))
-        screened = np.matmul(np.hstack([-2.0 * qc, np.ones((len(q), 1))]), right, out=block[:len(q)])
-        best = screened.argmin(axis=1)
-        low = screened[rows, best].copy()
-        tolerance = unit * (np.linalg.norm(qc, axis=1) + reach) ** 2
-        screened[rows, best] = np.inf
-        unsure = np.flatnonzero(screened.min(axis=1) <= low + tolerance)
-        screened[rows, best] = low
-        out[start:start + len(q)] = best
-        if len(unsure):
-            r, c = np.nonzero(screened[unsure] <= (low + tolerance)[unsure, None])
-            exact = ((q[unsure[r]] - points[c]) ** 2).sum(axis=1)
-            order = np.lexsort((c, exact, r))  # per query: smallest distance, then smallest index
-            first = order[np.r_[True, r[order][1:] != r[order][:-1]]]
-            out[start + unsure[r[first]]] = c[first]
-    return out
-
-
-def nearest_neighbours(points: np.ndarray, k: int) -> np.ndarray:
-    """``(n, k)`` indices of each point's ``k`` nearest other points of ``points`` ``(n, d)``,
-    nearest first (exact; for the few hundred points of the mirror test)."""
-    squared = ((points[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
-    np.fill_diagonal(squared, -1.0)  # each point first, then dropped
-    near = np.argpartition(squared, k, axis=1)[:, :k + 1]
-    order = np.argsort(np.take_along_axis(squared, near, axis=1), axis=1, kind="stable")
-    return np.take_along_axis(near, order, axis=1)[:, 1:]
-

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..config import DarcyanConfig
 from ..errors import DarcyanError, MeshError, require
-from ..eval.metrics import DEFAULT_THRESHOLD, GroundTruth, read_vts
+from ..eval.metrics import DEFAULT_THRESHOLD, GroundTruth, MatchScore, score_matches
 from ..geometry.geodesics import GeodesicSolver, interpolate, vertex_normals
 from ..geometry.mesh import Mesh
 from ..geometry.shape import Shape, prepare_shape
@@ -361,78 +361,24 @@ class MatchScene:
         return np.nan_to_num(self.errors, nan=0.0) > self.threshold
 
 
-def read_truth(spec: str, source_vertices: int | None = None, target_vertices: int | None = None) -> GroundTruth:
-    """Ground truth from a command-line spec: ``identity`` (same vertex numbering), or
-    ``A.vts,B.vts`` (line i of both files is the same body point; 1-based indices)."""
-    spec = str(spec).strip()
-    if spec == "identity":
-        return GroundTruth.identity()
-    parts = [p for p in spec.split(",") if p]
-    if len(parts) != 2:
-        raise DarcyanError(f"--truth: expected 'identity' or 'SOURCE.vts,TARGET.vts', got {spec!r}")
-    a, b = read_vts(parts[0], source_vertices), read_vts(parts[1], target_vertices)
-    if len(a) != len(b):
-        raise MeshError(parts[1], f"{len(b)} samples but {parts[0]} has {len(a)}: the lists must correspond line by line")
-    return GroundTruth(a, b)
-
-
-def _true_correspondents(truth: GroundTruth, source: Mesh, source_points: np.ndarray,
-                         target: Mesh, n_target: int) -> np.ndarray:
-    """``(k,)`` indices of ``target`` of the true correspondents of ``source_points`` (indices
-    of ``source``), -1 where the truth does not reach the prepared target."""
-    inverse_t = np.full(max(n_target, int(target.input_index.max()) + 1), -1, dtype=np.int64)
-    inverse_t[target.input_index] = np.arange(target.n_vertices)
-    if truth.source_samples is None:  # identity on the files' numbering
-        wanted = source.input_index[source_points]
-        ok = wanted < len(inverse_t)
-        out = np.full(len(wanted), -1, dtype=np.int64)
-        out[ok] = inverse_t[wanted[ok]]
-        return out
-    inverse_s = np.full(max(int(truth.source_samples.max()), int(source.input_index.max())) + 1, -1, dtype=np.int64)
-    inverse_s[source.input_index] = np.arange(source.n_vertices)
-    samples = inverse_s[truth.source_samples]
-    on_mesh = samples >= 0
-    if not on_mesh.any():
-        raise MeshError(source.name, "no ground-truth sample lies on the prepared mesh")
-    samples, targets = samples[on_mesh], truth.target_samples[on_mesh]
-    solver = GeodesicSolver(source)
-    out = np.empty(len(source_points), dtype=np.int64)
-    for i, p in enumerate(source_points):
-        nearest = int(np.argmin(solver.distance(int(p))[samples]))
-        t = int(targets[nearest])
-        out[i] = inverse_t[t] if t < len(inverse_t) else -1
-    return out
-
-
 def match_scene(source, target, correspondence, truth: GroundTruth | None = None,
                 config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
-                threshold: float = DEFAULT_THRESHOLD) -> MatchScene:
+                threshold: float = DEFAULT_THRESHOLD, score: MatchScore | None = None) -> MatchScene:
     """Matched points of ``correspondence`` (a :class:`darcyan.Correspondence`, vertices in the
-    files' numbering) on ``source`` and ``target`` (files or :class:`Mesh`), scored against
-    ``truth`` when given: error = geodesic distance on the area-1 target from the matched point
-    to the true one."""
-    views, sizes, shapes = [], [], []
+    files' numbering) on ``source`` and ``target`` (prepared :class:`~darcyan.geometry.shape.Shape`
+    s, files or :class:`Mesh`), with the errors of ``score`` (from
+    :func:`darcyan.eval.metrics.score_matches`), or scored against ``truth`` by it."""
+    views, shapes = [], []
     for given, vertices in ((source, correspondence.source_vertex), (target, correspondence.target_vertex)):
         shape = given if isinstance(given, Shape) else prepare_shape(_load(given)[0], config, repair)
         points = np.array([_mesh_index(shape, int(v)) for v in vertices], dtype=np.int64)
         curv = shape.curvatures(config.curvature_smoothing)
         views.append(ShapeView(shape.mesh, shape.name, points, curv.kmax, curv.kmin))
-        sizes.append(shape.n_input_vertices)
         shapes.append(shape)
-    errors = truth_points = None
-    if truth is not None:
-        if truth.source_samples is not None:
-            for samples, view, size in ((truth.source_samples, views[0], sizes[0]), (truth.target_samples, views[1], sizes[1])):
-                if samples.max() >= size:
-                    raise MeshError(view.name, f"ground-truth vertex {int(samples.max()) + 1} (1-based) out of range "
-                                               f"1..{size}")
-        truth_points = _true_correspondents(truth, views[0].mesh, views[0].points, views[1].mesh, sizes[1])
-        errors = np.full(len(truth_points), np.nan)
-        solver = shapes[1].solver
-        scale = np.sqrt(views[1].mesh.area())
-        for i, (q, q_true) in enumerate(zip(views[1].points, truth_points)):
-            if q_true >= 0:
-                errors[i] = solver.distance(int(q_true))[q] / scale
+    if score is None and truth is not None:
+        score = score_matches(shapes[0], shapes[1], correspondence, truth, threshold)
+    errors = None if score is None else score.errors
+    truth_points = None if score is None else score.true_points
     return MatchScene(views[0], views[1], np.asarray(correspondence.source_vertex),
                       np.asarray(correspondence.target_vertex), np.asarray(correspondence.distance, dtype=float),
                       errors, truth_points, threshold, overview_camera(views[0].mesh, views[0].points))

@@ -1,0 +1,94 @@
+"""Nearest-neighbour searches, exact, in memory O(queries x block) or O(points).
+
+- :func:`nearest_points`: numpy only (a cached match imports no scipy), float64, exact with
+  ties broken by the smallest index; for the few thousand points of the mirror test.
+- :func:`nearest_neighbours`: each point's k nearest others among a few hundred points.
+- :func:`nearest_rows`: any size; a k-d tree (scipy) in few dimensions, chunked single-precision
+  brute force in many (spectral embeddings of dense maps).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Nearest rows: a k-d tree up to this dimension, chunked brute force above it.
+KDTREE_MAX_DIM = 16
+NN_CHUNK_BYTES = 128 * 2**20
+
+# Nearest-neighbour searches in numpy, not scipy.spatial: importing that costs more (0.3 s) than
+# a cached match's whole work, and the sets here are small (800 queries, <= 10k points).
+QUERY_BLOCK = 64  # queries per block: a (64, 10k) block of distances, 5 MB, reused
+# Multiple of the float64 unit roundoff that bounds the error of the screened distances (their
+# exact bound is a few units times (d + 3)); any point within it of the minimum is measured again.
+SCREEN_SLACK = 64
+
+
+def nearest_points(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """``(q,)`` index of the point of ``points`` ``(n, d)`` nearest to each row of ``queries``
+    ``(q, d)`` in Euclidean distance, exactly (ties: the smallest index).
+
+    Squared distances are screened as ``|p|^2 - 2 q.p`` (one matrix product per block of
+    queries, about 2x a k-d tree's time here); a query whose runner-up lies within the product's
+    rounding of its minimum is settled by measuring ``|p - q|^2`` directly.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    queries = np.asarray(queries, dtype=np.float64)
+    centre = points.mean(axis=0)  # centred, the products' rounding is smaller
+    p = points - centre
+    p_sq = np.einsum("ij,ij->i", p, p)
+    right = np.vstack([p.T, p_sq])  # (d + 1, n): [-2 q, 1] @ right = |p|^2 - 2 q.p
+    reach = float(np.sqrt(p_sq.max(initial=0.0)))
+    unit = SCREEN_SLACK * (points.shape[1] + 3) * float(np.finfo(np.float64).eps)
+    block = np.empty((min(QUERY_BLOCK, len(queries)), len(points)))  # reused: no fresh pages per block
+    out = np.empty(len(queries), np.int64)
+    for start in range(0, len(queries), QUERY_BLOCK):
+        q = queries[start:start + QUERY_BLOCK]
+        qc = q - centre
+        rows = np.arange(len(q))
+        screened = np.matmul(np.hstack([-2.0 * qc, np.ones((len(q), 1))]), right, out=block[:len(q)])
+        best = screened.argmin(axis=1)
+        low = screened[rows, best].copy()
+        tolerance = unit * (np.linalg.norm(qc, axis=1) + reach) ** 2
+        screened[rows, best] = np.inf
+        unsure = np.flatnonzero(screened.min(axis=1) <= low + tolerance)
+        screened[rows, best] = low
+        out[start:start + len(q)] = best
+        if len(unsure):
+            r, c = np.nonzero(screened[unsure] <= (low + tolerance)[unsure, None])
+            exact = ((q[unsure[r]] - points[c]) ** 2).sum(axis=1)
+            order = np.lexsort((c, exact, r))  # per query: smallest distance, then smallest index
+            first = order[np.r_[True, r[order][1:] != r[order][:-1]]]
+            out[start + unsure[r[first]]] = c[first]
+    return out
+
+
+def nearest_neighbours(points: np.ndarray, k: int) -> np.ndarray:
+    """``(n, k)`` indices of each point's ``k`` nearest other points of ``points`` ``(n, d)``,
+    nearest first (exact; for the few hundred points of the mirror test)."""
+    squared = ((points[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
+    np.fill_diagonal(squared, -1.0)  # each point first, then dropped
+    near = np.argpartition(squared, k, axis=1)[:, :k + 1]
+    order = np.argsort(np.take_along_axis(squared, near, axis=1), axis=1, kind="stable")
+    return np.take_along_axis(near, order, axis=1)[:, 1:]
+
+
+def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """``(q,) int64``: for each row of ``queries (q, d)``, the nearest row of ``reference (n, d)``.
+
+    A k-d tree in few dimensions; in many, brute force in single precision by chunks of queries
+    (memory ``chunk x n``, never ``q x n``).
+    """
+    reference = np.ascontiguousarray(reference, dtype=np.float64)
+    queries = np.ascontiguousarray(queries, dtype=np.float64)
+    if reference.shape[1] <= KDTREE_MAX_DIM:
+        from scipy.spatial import cKDTree
+
+        return cKDTree(reference).query(queries)[1].astype(np.int64)
+    reference, queries = reference.astype(np.float32), queries.astype(np.float32)
+    ref_sq = np.einsum("ij,ij->i", reference, reference)
+    chunk = max(1, NN_CHUNK_BYTES // (4 * len(reference)))
+    out = np.empty(len(queries), dtype=np.int64)
+    for start in range(0, len(queries), chunk):
+        q = queries[start:start + chunk]
+        out[start:start + chunk] = np.argmin(ref_sq[None, :] - 2.0 * (q @ reference.T), axis=1)
+    return out
