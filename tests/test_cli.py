@@ -75,7 +75,8 @@ def test_demo_reports_correct_matches(capsys):
 
 BAD = {
     "missing": (None, "no such file"),
-    "unknown.xyz": ("1 2 3", "unsupported file type"),
+    "unknown.dxf": ("0\nSECTION\n", "unsupported file type"),
+    "points.xyz": ("1 2 3\n", "1 points and no faces: a triangle mesh is needed"),
     "header.off": ("OFF\n4 x 0\n", "integers"),
     "nan.off": ("OFF\n4 2 0\n0 0 0\nnan 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n", "NaN"),
     "range.off": ("OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 7\n", "out of range"),

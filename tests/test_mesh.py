@@ -64,6 +64,35 @@ def test_polygons_are_split_with_a_warning(tmp_path):
     assert mesh.n_faces == 3
 
 
+@pytest.mark.parametrize("encoding", ["binary", "ascii"])
+def test_stl_is_read_as_the_triangle_soup_trimesh_writes(tmp_path, encoding):
+    import trimesh
+
+    mesh = synthetic.icosphere(2)
+    path = tmp_path / f"{encoding}.stl"
+    trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).export(
+        path, file_type="stl" if encoding == "binary" else "stl_ascii")
+    back = load_mesh(path)
+    corners = mesh.vertices[mesh.faces]
+    if encoding == "binary":  # binary STL stores float32
+        corners = corners.astype(np.float32).astype(np.float64)
+    assert back.n_faces == mesh.n_faces and back.n_vertices == 3 * mesh.n_faces  # nothing welded
+    np.testing.assert_array_equal(back.vertices[back.faces], corners)
+
+
+@pytest.mark.parametrize("name, text", [
+    ("points.xyz", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n"),
+    ("points.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                   "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"),
+    ("points.off", "OFF\n4 0 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"),
+])
+def test_points_without_faces_need_a_triangle_mesh(tmp_path, name, text):
+    path = write(tmp_path, name, text)
+    with pytest.raises(MeshError, match="4 points and no faces: a triangle mesh is needed") as info:
+        load_mesh(path)
+    assert str(path) in str(info.value) and "\n" not in str(info.value)
+
+
 BAD_OFF = {
     "empty.off": ("", "empty"),
     "header.off": ("PLY\n3 1 0\n", "not an OFF file"),
@@ -95,7 +124,7 @@ def test_missing_file_and_unknown_extension(tmp_path):
     with pytest.raises(MeshError, match="no such file"):
         load_mesh(tmp_path / "nothing.off")
     with pytest.raises(MeshError, match="unsupported file type"):
-        load_mesh(write(tmp_path, "m.stl", "solid"))
+        load_mesh(write(tmp_path, "m.dxf", "0\nSECTION\n"))
 
 
 def test_garbage_ply_is_a_mesh_error(tmp_path):

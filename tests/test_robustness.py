@@ -123,7 +123,7 @@ MALFORMED = {
     "relative_before_start.obj": (obj_text().replace("f 1 3 5", "f -9 3 5"), "before the first vertex"),
     "out_of_range.obj": (obj_text(faces=RANGE_F), "out of range"),
     "text_index.obj": (obj_text().replace("f 1 3 5", "f 1 x 5"), "integer vertex indices"),
-    "no_faces.obj": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n", "empty mesh"),
+    "no_faces.obj": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n", "a triangle mesh is needed"),
     "empty.obj": ("", "empty file"),
     "garbage.obj": (bytes(range(256)) * 8, "binary content"),
     # PLY, ASCII
@@ -155,8 +155,10 @@ MALFORMED = {
     "out_of_range_binary.ply": (ply_binary(faces=RANGE_F), "out of range"),
     "garbage_body_binary.ply": (ply_header("binary_little_endian", 6, 8) + bytes(range(97)), "truncated"),
     "garbage_header.ply": (b"ply\n" + bytes(range(1, 256)) * 4, "PLY"),
+    # STL
+    "no_triangles.stl": ("solid x\nendsolid x\n", "no triangles"),
+    "truncated_binary.stl": (bytes(80) + struct.pack("<I", 2) + bytes(60), "not an STL file"),
     # unsupported extensions
-    "mesh.stl": ("solid x\nendsolid x\n", "unsupported file type '.stl'"),
     "mesh.off.gz": (b"\x1f\x8b\x08\x00", "unsupported file type '.gz'"),
     "no_extension": (off_text(), "unsupported file type '(none)'"),
 }

@@ -1,11 +1,23 @@
-"""Mesh files: strict readers (OFF, OBJ, PLY, TOSCA ``.vert``/``.tri``) and writers."""
+"""Mesh files: strict readers (OFF, OBJ, PLY, STL, TOSCA ``.vert``/``.tri``) and writers.
+
+Every reader keeps the file's vertices in the file's order with the file's coordinates (nothing
+merged, dropped or reordered) and gives triangles; every problem is one :class:`MeshError` line
+naming the file, and the line where there is one.
+
+PLY and STL records are read by trimesh. Its PLY reader takes the layout on trust (lines after the
+last element are ignored, ``4 0 1 2`` in a list of triangles is a triangle, a line of spaces in the
+body a vertex at -1), so the header and an ASCII body's lines are checked before it runs, and a
+binary body's list lengths after. OFF, OBJ and ``.vert``/``.tri`` are parsed here: trimesh knows no
+``.vert``/``.tri``; its OFF reader has the same blind spots and fails on polygons of five corners,
+and checking an OFF file line by line already parses it; its OBJ reader renumbers vertices (splits
+them by texture coordinate or normal, drops unreferenced ones) and reads index 0 as the first vertex.
+"""
 
 from __future__ import annotations
 
+import io
 import os
-import re
 import warnings
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -14,25 +26,29 @@ from ..errors import MeshError
 from ..geometry.mesh import Mesh, MeshWarning
 from ..geometry.repair import check_mesh
 
-READ_FORMATS = (".off", ".obj", ".ply", ".vert", ".tri")
+READ_FORMATS = (".off", ".obj", ".ply", ".stl", ".vert", ".tri")
 WRITE_FORMATS = (".off", ".ply")
+POINT_FORMATS = (".xyz",)  # recognised only to say that a triangle mesh is needed
 
 # ----------------------------------------------------------------------------------------------
 # Reading
 
 
 def load_mesh(path: str | os.PathLike) -> Mesh:
-    """Read a triangle mesh from OFF, OBJ, PLY (ASCII or binary), or TOSCA's ``.vert``+``.tri``.
+    """Read a triangle mesh from OFF, OBJ, PLY or STL (ASCII or binary), or TOSCA's ``.vert``+``.tri``.
 
-    Polygons with more than three corners are split into triangles (fan). The mesh is checked
-    by :func:`check_mesh`; nothing is repaired or dropped here.
+    Polygons with more than three corners are split into triangles (fan). STL stores every
+    triangle with its own three corners: it is read as that triangle soup (three vertices per
+    face, nothing welded); ``--repair`` welds it. The mesh is checked by :func:`check_mesh`;
+    nothing is repaired or dropped here.
 
     Raises:
-        MeshError: missing or unreadable file, unknown extension, malformed content.
+        MeshError: missing or unreadable file, unknown extension, malformed content, points
+            without faces (``.xyz``, a PLY with only vertices, an OFF with 0 faces).
     """
     path = Path(path)
     ext = path.suffix.lower()
-    if ext not in READ_FORMATS:
+    if ext not in READ_FORMATS + POINT_FORMATS:
         raise MeshError(path, f"unsupported file type {ext or '(none)'!r}; "
                               f"expected one of {', '.join(READ_FORMATS)}")
     if ext in (".vert", ".tri"):
@@ -41,8 +57,10 @@ def load_mesh(path: str | os.PathLike) -> Mesh:
         data = _read_bytes(path)
         if not data.strip():
             raise MeshError(path, "empty file")
-        parse = {".off": _parse_off, ".ply": _parse_ply, ".obj": _parse_obj}[ext]
-        vertices, faces = parse(data, path)
+        read = {".off": _read_off, ".obj": _read_obj, ".ply": _read_ply, ".stl": _read_stl, ".xyz": _read_xyz}[ext]
+        vertices, faces = read(data, path)
+    if len(faces) == 0 and len(vertices) > 0:
+        raise MeshError(path, f"{len(vertices)} points and no faces: a triangle mesh is needed")
     mesh = Mesh(vertices, faces, name=str(path))
     check_mesh(mesh)
     return mesh
@@ -67,10 +85,15 @@ def _decode_text(data: bytes, path: Path) -> str:
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError:
-        try:
-            return data.decode("latin-1")
-        except UnicodeDecodeError:  # pragma: no cover - latin-1 decodes every byte
-            raise MeshError(path, "not a text file") from None
+        return data.decode("latin-1")  # decodes every byte; a stray one fails as a number later
+
+
+def _data_lines(text: str) -> list[tuple[int, list[str]]]:
+    """``(line number, tokens)`` of every line with data: ``#`` comments and blank lines left out."""
+    lines = enumerate(text.splitlines(), start=1)
+    if "#" not in text:  # most files: a tenth faster
+        return [(n, t) for n, line in lines if (t := line.split())]
+    return [(n, t) for n, line in lines if (t := line.split("#", 1)[0].split())]
 
 
 def _numbers(rows: list[list[str]], line_numbers: list[int], dtype, path: Path, what: str) -> np.ndarray:
@@ -86,164 +109,21 @@ def _numbers(rows: list[list[str]], line_numbers: list[int], dtype, path: Path, 
         raise MeshError(path, f"malformed {what}") from None  # pragma: no cover
 
 
-# Bytes that str.split() treats as whitespace, and line breaks other than "\n" that
-# str.splitlines() honours: files with the latter take the slow, line-by-line path.
-_ASCII_SPACE = np.zeros(256, bool)
-_ASCII_SPACE[list(b" \t\n\r\x0b\x0c\x1c\x1d\x1e\x1f")] = True
-_ODD_BREAKS = b"\x0b\x0c\x1c\x1d\x1e"
-
-
-def _tokens_per_line(data: bytes) -> np.ndarray | None:
-    """Tokens on each non-empty line of a plain-ASCII text (lines ended by ``\n`` or ``\r\n``), or
-    ``None`` when the text has comments, non-ASCII bytes or unusual line breaks."""
-    if b"#" in data or data.count(b"\r") != data.count(b"\r\n"):
-        return None
-    b = np.frombuffer(data, np.uint8)
-    if b.size == 0 or (b >= 128).any() or any(c in data for c in _ODD_BREAKS):
-        return None
-    space = _ASCII_SPACE[b]
-    starts = ~space
-    starts[1:] &= space[:-1]
-    line_of = np.cumsum(b == ord("\n"))
-    counts = np.bincount(line_of[starts], minlength=int(line_of[-1]) + 1)
-    return counts[counts > 0]
-
-
-def _parse_off_fast(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
-    """The common case, vectorized: plain OFF, one vertex ``x y z`` and one triangle ``3 i j k``
-    per line. ``None`` when the file is anything else (then the line-by-line parser runs and
-    names the offending line)."""
-    per_line = _tokens_per_line(data)
-    if per_line is None or len(per_line) < 2:
-        return None
-    tokens = data.decode("ascii").split()
-    if tokens[0].upper() not in ("OFF", "COFF", "NOFF", "CNOFF"):
-        return None
-    head = 1 if per_line[0] > 1 else 2  # counts on the OFF line or on the next one
-    count_at = 1
-    try:
-        n_vertices, n_faces = int(tokens[count_at]), int(tokens[count_at + 1])
-    except (ValueError, IndexError):
-        return None
-    header_tokens = int(per_line[:head].sum())
-    body = per_line[head:]
-    if n_vertices < 0 or n_faces < 0 or len(body) != n_vertices + n_faces:
-        return None
-    if (body[:n_vertices] != 3).any() or (body[n_vertices:] != 4).any():
-        return None
-    split = header_tokens + 3 * n_vertices
-    try:
-        vertices = np.array(tokens[header_tokens:split], dtype=np.float64).reshape(-1, 3)
-        faces = np.array(tokens[split:], dtype=np.int64).reshape(-1, 4)
-    except (ValueError, OverflowError):
-        return None
-    if (faces[:, 0] != 3).any():
-        return None
-    return vertices, faces[:, 1:].copy()
-
-
-def _parse_off(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
-    fast = _parse_off_fast(data)
-    if fast is not None:
-        return fast
-    text = _decode_text(data, path)
-    lines = []  # (line number, tokens) of the non-empty, comment-free lines
-    for number, raw in enumerate(text.splitlines(), start=1):
-        tokens = raw.split("#", 1)[0].split()
-        if tokens:
-            lines.append((number, tokens))
-    if not lines:
-        raise MeshError(path, "empty file")
-    number, head = lines[0]
-    keyword = head[0]
-    if keyword.upper() not in ("OFF", "COFF", "NOFF", "CNOFF"):
-        raise MeshError(path, f"line {number}: not an OFF file (header {keyword[:20]!r})")
-    counts = head[1:]
-    body = lines[1:]
-    if not counts:
-        if not body:
-            raise MeshError(path, "missing vertex and face counts")
-        number, counts = body[0]
-        body = body[1:]
-    if len(counts) < 2:
-        raise MeshError(path, f"line {number}: expected 'vertices faces [edges]' counts")
-    try:
-        n_vertices, n_faces = int(counts[0]), int(counts[1])
-    except ValueError:
-        raise MeshError(path, f"line {number}: counts must be integers, found {' '.join(counts)!r}") from None
-    if n_vertices < 0 or n_faces < 0:
-        raise MeshError(path, f"line {number}: negative counts")
-    if len(body) < n_vertices:
-        raise MeshError(path, f"truncated: header says {n_vertices} vertices, file has {len(body)} data lines")
-    vertex_lines = body[:n_vertices]
-    face_lines = body[n_vertices:]
-    bad = [(n, t) for n, t in vertex_lines if len(t) < 3]
-    if bad:
-        raise MeshError(path, f"line {bad[0][0]}: a vertex needs 3 coordinates, found {len(bad[0][1])}")
-    vertices = _numbers([t[:3] for _, t in vertex_lines], [n for n, _ in vertex_lines], np.float64,
-                        path, "vertex coordinates")
-    if len(face_lines) < n_faces:
-        raise MeshError(path, f"truncated: header says {n_faces} faces, found {len(face_lines)}")
-    if len(face_lines) > n_faces:
-        extra = face_lines[n_faces][0]
-        raise MeshError(path, f"line {extra}: data after the last face (vertex or face count in the "
-                              f"header is wrong: {n_vertices} vertices, {n_faces} faces)")
-    faces = _polygons_to_triangles(face_lines, path)
-    return vertices, faces
-
-
-def _polygons_to_triangles(face_lines: list[tuple[int, list[str]]], path: Path) -> np.ndarray:
-    """Faces given as ``k i1 .. ik [colour]`` rows: triangles as they are, polygons fanned."""
-    if not face_lines:
+def _triangulate(polygons, path: Path, where) -> np.ndarray:
+    """``(t, 3)`` triangles from integer polygons (an ``(n, k)`` array or a list of index
+    sequences): triangles as they are, larger polygons fanned from their first corner in file
+    order (with a :class:`MeshWarning`); fewer than 3 corners is an error, ``where(i)`` names
+    polygon i."""
+    if isinstance(polygons, np.ndarray) and polygons.ndim == 2:
+        if polygons.shape[1] == 3 or len(polygons) == 0:
+            return polygons.astype(np.int64).reshape(-1, 3)
+        polygons = list(polygons)
+    if len(polygons) == 0:
         return np.zeros((0, 3), dtype=np.int64)
-    sizes = []
-    for number, tokens in face_lines:
-        try:
-            k = int(tokens[0])
-        except ValueError:
-            raise MeshError(path, f"line {number}: face expected ('k i1 .. ik'), found {' '.join(tokens[:6])!r}") from None
-        if k < 3:
-            raise MeshError(path, f"line {number}: a face needs at least 3 corners, found {k}")
-        if len(tokens) < k + 1:
-            raise MeshError(path, f"line {number}: face with {k} corners needs {k} indices, found {len(tokens) - 1}")
-        sizes.append(k)
-    if all(k == 3 for k in sizes):
-        return _numbers([t[1:4] for _, t in face_lines], [n for n, _ in face_lines], np.int64, path,
-                        "integer vertex indices")
-    triangles = []
-    for (number, tokens), k in zip(face_lines, sizes):
-        idx = _numbers([tokens[1:k + 1]], [number], np.int64, path, "integer vertex indices")[0]
-        triangles.extend((idx[0], idx[j], idx[j + 1]) for j in range(1, k - 1))
-    warnings.warn(f"{path}: polygons with more than 3 corners were split into triangles", MeshWarning,
-                  stacklevel=3)
-    return np.array(triangles, dtype=np.int64)
-
-
-def _read_vert_tri(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """TOSCA's native pair: ``name.vert`` (x y z rows) and ``name.tri`` (1-based i j k rows)."""
-    vert_path, tri_path = path.with_suffix(".vert"), path.with_suffix(".tri")
-    tables = []
-    for p, dtype, what in ((vert_path, np.float64, "vertex coordinates"), (tri_path, np.int64, "integer vertex indices")):
-        text = _decode_text(_read_bytes(p), p)
-        rows = [(n, line.split()) for n, line in enumerate(text.splitlines(), start=1) if line.strip()]
-        bad = [(n, t) for n, t in rows if len(t) != 3]
-        if bad:
-            raise MeshError(p, f"line {bad[0][0]}: expected 3 values, found {len(bad[0][1])}")
-        tables.append(_numbers([t for _, t in rows], [n for n, _ in rows], dtype, p, what).reshape(-1, 3))
-    vertices, faces = tables
-    return vertices, faces - 1
-
-
-def _triangulate(polygons: list, labels: list[str], path: Path) -> np.ndarray:
-    """``(t, 3)`` triangles from polygons (sequences of vertex indices): triangles as they are,
-    larger polygons fanned (with a :class:`MeshWarning`); fewer than 3 corners is an error.
-    ``labels[i]`` names polygon i in messages (a line or face number)."""
-    if not polygons:
-        return np.zeros((0, 3), dtype=np.int64)
-    sizes = np.fromiter((len(p) for p in polygons), dtype=np.int64, count=len(polygons))
+    sizes = np.fromiter(map(len, polygons), dtype=np.int64, count=len(polygons))
     small = np.flatnonzero(sizes < 3)
     if len(small):
-        raise MeshError(path, f"{labels[small[0]]}: a face needs at least 3 corners, found {sizes[small[0]]}")
+        raise MeshError(path, f"{where(small[0])}: a face needs at least 3 corners, found {sizes[small[0]]}")
     try:
         if (sizes == 3).all():
             return np.array(polygons, dtype=np.int64).reshape(-1, 3)
@@ -256,228 +136,91 @@ def _triangulate(polygons: list, labels: list[str], path: Path) -> np.ndarray:
     return out
 
 
-# PLY (Turk's polygon file format), ASCII and binary, read without a third-party parser so that
-# every disagreement between header and body is an error instead of a silently different mesh.
-_PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
-              "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
-              "float": "f4", "float32": "f4", "double": "f8", "float64": "f8"}
-_PLY_FORMATS = {"ascii": "", "binary_little_endian": "<", "binary_big_endian": ">"}
-_PLY_FACE_LISTS = ("vertex_indices", "vertex_index")
-_PLY_END_HEADER = re.compile(rb"(?:^|\n)end_header[ \t]*(?:\r\n|\n|\r|\Z)")
+def _trimesh_read(fmt: str, data: bytes, path: Path, hint: str = "", **options) -> dict:
+    """What trimesh's reader for ``fmt`` makes of ``data``: the keyword arguments of a Trimesh
+    (``vertices``, ``faces``, ``metadata``; ``geometry`` holding several parts). Whatever it raises
+    becomes one MeshError line, ``hint`` appended."""
+    import trimesh.exchange.load  # here: importing trimesh takes half a second
 
-
-@dataclass
-class _PlyElement:
-    """One ``element`` of a PLY header: its properties are ``(name, type)`` for scalars and
-    ``(name, count type, item type)`` for lists (numpy type codes without byte order)."""
-
-    name: str
-    count: int
-    properties: list = field(default_factory=list)
-
-
-def _parse_ply_header(data: bytes, path: Path) -> tuple[str, list[_PlyElement], int, int]:
-    """``(byte order, elements, body offset, header line count)``; byte order '' means ASCII."""
-    if not data.startswith(b"ply"):
-        raise MeshError(path, "not a PLY file (it must start with 'ply')")
-    end = _PLY_END_HEADER.search(data)
-    if end is None:
-        raise MeshError(path, "PLY header has no 'end_header' line")
     try:
-        lines = data[:end.start()].decode("ascii").splitlines()
-    except UnicodeDecodeError:
-        raise MeshError(path, "PLY header contains non-ASCII bytes") from None
-    order, elements = None, []
-    for number, line in enumerate(lines, start=1):
-        tokens = line.split()
-        if number == 1:
-            if tokens != ["ply"]:
-                raise MeshError(path, "not a PLY file (it must start with a 'ply' line)")
-            continue
-        if not tokens or tokens[0] in ("comment", "obj_info"):
-            continue
-        where = f"line {number}"
-        if tokens[0] == "format":
-            if len(tokens) != 3 or tokens[1] not in _PLY_FORMATS:
-                raise MeshError(path, f"{where}: unknown PLY format {' '.join(tokens[1:])!r}")
-            order = _PLY_FORMATS[tokens[1]]
-        elif tokens[0] == "element":
-            if len(tokens) != 3 or not tokens[2].isdigit():
-                raise MeshError(path, f"{where}: expected 'element NAME COUNT', found {line.strip()[:60]!r}")
-            elements.append(_PlyElement(tokens[1], int(tokens[2])))
-        elif tokens[0] == "property":
-            if not elements:
-                raise MeshError(path, f"{where}: property before any element")
-            if len(tokens) == 5 and tokens[1] == "list" and tokens[2] in _PLY_TYPES and tokens[3] in _PLY_TYPES \
-                    and _PLY_TYPES[tokens[2]][0] in "iu":
-                elements[-1].properties.append((tokens[4], _PLY_TYPES[tokens[2]], _PLY_TYPES[tokens[3]]))
-            elif len(tokens) == 3 and tokens[1] in _PLY_TYPES:
-                elements[-1].properties.append((tokens[2], _PLY_TYPES[tokens[1]]))
-            else:
-                raise MeshError(path, f"{where}: malformed property {line.strip()[:60]!r}")
-        else:
-            raise MeshError(path, f"{where}: unexpected PLY header line {line.strip()[:60]!r}")
-    if order is None:
-        raise MeshError(path, "PLY header has no format line")
-    return order, elements, end.end(), len(lines) + 1
+        return trimesh.exchange.load.mesh_loaders[fmt](io.BytesIO(data), **options)
+    except Exception as exc:  # a third-party parser raises whatever it trips on
+        detail = " ".join(str(exc).split())[:160] or type(exc).__name__
+        raise MeshError(path, f"not a readable {fmt.upper()} file ({detail}){hint}") from None
 
 
-def _parse_ply(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
-    order, elements, offset, header_lines = _parse_ply_header(data, path)
-    names = [e.name for e in elements]
-    if "vertex" not in names:
-        raise MeshError(path, "PLY file has no vertex element")
-    vertex = elements[names.index("vertex")]
-    columns = [p[0] for p in vertex.properties]
-    missing = [c for c in "xyz" if c not in columns]
-    if missing or any(len(p) == 3 for p in vertex.properties):
-        raise MeshError(path, f"PLY vertex element needs scalar x, y, z properties (has {', '.join(columns) or 'none'})")
-    face = elements[names.index("face")] if "face" in names else _PlyElement("face", 0, [("vertex_indices", "u1", "i4")])
-    lists = [i for i, p in enumerate(face.properties) if len(p) == 3 and p[0] in _PLY_FACE_LISTS]
-    if not lists:
-        raise MeshError(path, "PLY face element has no vertex_indices list")
-    if face.properties[lists[0]][2][0] not in "iu":
-        raise MeshError(path, "PLY face indices must be integers")
-    body = data[offset:]
-    records = (_ply_ascii_records if order == "" else _ply_binary_records)(body, elements, order, path, header_lines)
-    xyz = [columns.index(c) for c in "xyz"]
-    vertices = np.stack([np.asarray(records["vertex"][i], dtype=np.float64) for i in xyz], axis=1) \
-        if vertex.count else np.zeros((0, 3))
-    polygons = records["face"][lists[0]] if "face" in records and face.count else []
-    if isinstance(polygons, np.ndarray) and polygons.ndim == 2 and polygons.shape[1] == 3:
-        return vertices, polygons.astype(np.int64)
-    return vertices, _triangulate(list(polygons), [f"face {i}" for i in range(len(polygons))], path)
+# OFF -------------------------------------------------------------------------------------------
+
+_OFF_KEYWORDS = ("OFF", "COFF", "NOFF", "CNOFF")
 
 
-def _ply_ascii_records(body: bytes, elements: list[_PlyElement], order: str, path: Path,
-                       header_lines: int) -> dict:
-    """Every element's properties from an ASCII body: ``{element: [values per property]}``, one
-    line per record, the line count and each line's length checked against the header."""
-    text = _decode_text(body, path)
-    lines = [(n, t) for n, raw in enumerate(text.splitlines(), start=header_lines + 1) if (t := raw.split())]
-    total = sum(e.count for e in elements)
-    announced = ", ".join(f"{e.count} {e.name}" for e in elements)
-    if len(lines) < total:
-        raise MeshError(path, f"truncated: header announces {total} element lines ({announced}), "
-                              f"the file has {len(lines)}")
-    if len(lines) > total:
-        raise MeshError(path, f"line {lines[total][0]}: data after the last element (a count in the "
-                              f"header is wrong: {announced})")
-    out, start = {}, 0
-    for e in elements:
-        rows, start = lines[start:start + e.count], start + e.count
-        if e.name not in ("vertex", "face"):
-            continue
-        if all(len(p) == 2 for p in e.properties):
-            bad = [(n, t) for n, t in rows if len(t) != len(e.properties)]
-            if bad:
-                raise MeshError(path, f"line {bad[0][0]}: {e.name} has {len(bad[0][1])} values, the header "
-                                      f"declares {len(e.properties)}")
-            table = _numbers([t for _, t in rows], [n for n, _ in rows], np.float64, path, f"{e.name} values") \
-                if rows else np.zeros((0, len(e.properties)))
-            out[e.name] = list(table.reshape(len(rows), -1).T)
-            continue
-        columns: list[list] = [[] for _ in e.properties]
-        for n, t in rows:
-            pos = 0
-            for i, prop in enumerate(e.properties):
-                try:
-                    if len(prop) == 2:
-                        columns[i].append(float(t[pos]))
-                        pos += 1
-                    else:
-                        k = int(t[pos])
-                        if k < 0 or pos + 1 + k > len(t):
-                            raise IndexError
-                        columns[i].append([int(x) for x in t[pos + 1:pos + 1 + k]])
-                        pos += 1 + k
-                except (ValueError, IndexError):
-                    raise MeshError(path, f"line {n}: malformed {e.name} {' '.join(t[:8])!r}") from None
-            if pos != len(t):
-                raise MeshError(path, f"line {n}: {e.name} has {len(t) - pos} values more than the header declares")
-        out[e.name] = columns
-    return out
+def _read_off(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """``OFF`` (or COFF, NOFF, CNOFF), the counts ``vertices faces [edges]`` (on that line or the
+    next), then exactly that many vertex lines ``x y z [...]`` and face lines ``k i1 .. ik [...]``."""
+    rows = _data_lines(_decode_text(data, path))
+    if not rows:
+        raise MeshError(path, "empty file")
+    number, head = rows[0]
+    if head[0].upper() not in _OFF_KEYWORDS:
+        raise MeshError(path, f"line {number}: not an OFF file (header {head[0][:20]!r})")
+    counts, body = head[1:], rows[1:]
+    if not counts:
+        if not body:
+            raise MeshError(path, "missing vertex and face counts")
+        (number, counts), body = body[0], body[1:]
+    if len(counts) < 2:
+        raise MeshError(path, f"line {number}: expected 'vertices faces [edges]' counts")
+    try:
+        n_vertices, n_faces = int(counts[0]), int(counts[1])
+    except ValueError:
+        raise MeshError(path, f"line {number}: counts must be integers, found {' '.join(counts)!r}") from None
+    if n_vertices < 0 or n_faces < 0:
+        raise MeshError(path, f"line {number}: negative counts")
+    # The counts must describe the body exactly: one too many vertices would read a face as a vertex.
+    if len(body) < n_vertices + n_faces:
+        raise MeshError(path, f"truncated: header says {n_vertices} vertices and {n_faces} faces, "
+                              f"file has {len(body)} data lines")
+    if len(body) > n_vertices + n_faces:
+        raise MeshError(path, f"line {body[n_vertices + n_faces][0]}: data after the last face (vertex or face "
+                              f"count in the header is wrong: {n_vertices} vertices, {n_faces} faces)")
+    vertex_rows, face_rows = body[:n_vertices], body[n_vertices:]
+    short = next((row for row in vertex_rows if len(row[1]) < 3), None)
+    if short:
+        raise MeshError(path, f"line {short[0]}: a vertex needs 3 coordinates, found {len(short[1])}")
+    vertices = _numbers([t[:3] for _, t in vertex_rows], [n for n, _ in vertex_rows], np.float64, path,
+                        "vertex coordinates")
+    return vertices.reshape(-1, 3), _triangulate(_off_polygons(face_rows, path), path,
+                                                 lambda i: f"line {face_rows[i][0]}")
 
 
-def _ply_binary_records(body: bytes, elements: list[_PlyElement], order: str, path: Path,
-                        header_lines: int) -> dict:
-    """Every element's properties from a binary body (see :func:`_ply_ascii_records`); the body
-    must end exactly after the last element."""
-    out, pos = {}, 0
-    for e in elements:
-        out[e.name], pos = _ply_binary_element(body, pos, e, order, path)
-    if pos != len(body):
-        raise MeshError(path, f"{len(body) - pos} bytes after the last element (a count in the header "
-                              f"is wrong: {', '.join(f'{e.count} {e.name}' for e in elements)})")
-    return out
+def _off_polygons(face_rows: list[tuple[int, list[str]]], path: Path):
+    """Face lines ``k i1 .. ik [colour]`` as an ``(n, 3)`` array when all are triangles (the
+    common case, at once), else a list of index arrays."""
+    if all(t[0] == "3" and len(t) >= 4 for _, t in face_rows):
+        return _numbers([t[1:4] for _, t in face_rows], [n for n, _ in face_rows], np.int64, path,
+                        "integer vertex indices").reshape(-1, 3)
+    polygons = []
+    for number, tokens in face_rows:
+        try:
+            k = int(tokens[0])
+        except ValueError:
+            raise MeshError(path, f"line {number}: face expected ('k i1 .. ik'), found {' '.join(tokens[:6])!r}") from None
+        if k < 3:
+            raise MeshError(path, f"line {number}: a face needs at least 3 corners, found {k}")
+        if len(tokens) < k + 1:
+            raise MeshError(path, f"line {number}: face with {k} corners needs {k} indices, found {len(tokens) - 1}")
+        polygons.append(_numbers([tokens[1:k + 1]], [number], np.int64, path, "integer vertex indices")[0])
+    return polygons
 
 
-def _ply_binary_element(body: bytes, pos: int, e: _PlyElement, order: str, path: Path) -> tuple[list, int]:
-    """One binary element starting at byte ``pos``: its columns and the offset after it."""
-    left = len(body) - pos
-    if e.count == 0 or not e.properties:
-        return [np.zeros(0) for _ in e.properties], pos
-
-    def truncated():
-        return MeshError(path, f"truncated: the file ends inside element {e.name!r} ({e.count} announced)")
-
-    # Fast path: every list of the element as long as in its first record (one structured read).
-    fields, cursor = [], pos
-    for i, prop in enumerate(e.properties):
-        if len(prop) == 2:
-            fields.append((f"s{i}", order + prop[1]))
-            cursor += np.dtype(prop[1]).itemsize
-        else:
-            count_type = np.dtype(order + prop[1])
-            if cursor + count_type.itemsize > len(body):
-                raise truncated()
-            k = int(np.frombuffer(body, count_type, 1, cursor)[0])
-            fields += [(f"c{i}", count_type), (f"v{i}", order + prop[2], (k,))]
-            cursor += count_type.itemsize + k * np.dtype(prop[2]).itemsize
-    dtype = np.dtype(fields)
-    if e.count <= left // dtype.itemsize:
-        table = np.frombuffer(body, dtype, e.count, pos)
-        if all(len(p) == 2 or (table[f"c{i}"] == dtype[f"v{i}"].shape[0]).all() for i, p in enumerate(e.properties)):
-            columns = [table[f"s{i}"] if len(p) == 2 else table[f"v{i}"].reshape(e.count, -1)
-                       for i, p in enumerate(e.properties)]
-            return columns, pos + e.count * dtype.itemsize
-    elif all(len(p) == 2 for p in e.properties):
-        raise truncated()
-    # General path: records of different lengths, read one by one.
-    min_size = sum(np.dtype(p[1]).itemsize for p in e.properties)
-    if e.count * min_size > left:
-        raise truncated()
-    columns = [[] for _ in e.properties]
-    for _ in range(e.count):
-        for i, prop in enumerate(e.properties):
-            if len(prop) == 2:
-                t = np.dtype(order + prop[1])
-                if pos + t.itemsize > len(body):
-                    raise truncated()
-                columns[i].append(np.frombuffer(body, t, 1, pos)[0])
-                pos += t.itemsize
-            else:
-                ct, it = np.dtype(order + prop[1]), np.dtype(order + prop[2])
-                if pos + ct.itemsize > len(body):
-                    raise truncated()
-                k = int(np.frombuffer(body, ct, 1, pos)[0])
-                pos += ct.itemsize
-                if k < 0 or pos + k * it.itemsize > len(body):
-                    raise truncated()
-                columns[i].append(np.frombuffer(body, it, k, pos))
-                pos += k * it.itemsize
-    return columns, pos
+# OBJ -------------------------------------------------------------------------------------------
 
 
-def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
+def _read_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Wavefront OBJ: ``v x y z [...]`` and ``f i[/t[/n]] ...`` statements (1-based indices,
     negative ones relative to the vertices read so far); every other statement is ignored."""
-    text = _decode_text(data, path)
-    coords, coord_lines, polygons, labels = [], [], [], []
-    for number, raw in enumerate(text.splitlines(), start=1):
-        tokens = raw.split("#", 1)[0].split()
-        if not tokens:
-            continue
+    coords, coord_lines, polygons, face_lines = [], [], [], []
+    for number, tokens in _data_lines(_decode_text(data, path)):
         if tokens[0] == "v":
             if len(tokens) < 4:
                 raise MeshError(path, f"line {number}: a vertex needs 3 coordinates, found {len(tokens) - 1}")
@@ -496,9 +239,182 @@ def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
             if min(resolved, default=0) < 0:
                 raise MeshError(path, f"line {number}: relative index {min(idx)} points before the first vertex")
             polygons.append(resolved)
-            labels.append(f"line {number}")
+            face_lines.append(number)
     vertices = _numbers(coords, coord_lines, np.float64, path, "vertex coordinates") if coords else np.zeros((0, 3))
-    return vertices.reshape(-1, 3), _triangulate(polygons, labels, path)
+    return vertices.reshape(-1, 3), _triangulate(polygons, path, lambda i: f"line {face_lines[i]}")
+
+
+# PLY -------------------------------------------------------------------------------------------
+
+# The property types trimesh's PLY reader knows, as numpy type codes.
+_PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
+              "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+              "int64": "i8", "uint64": "u8", "float16": "f2", "float": "f4", "float32": "f4",
+              "double": "f8", "float64": "f8"}
+_PLY_FORMATS = ("ascii", "binary_little_endian", "binary_big_endian")
+_PLY_FACE_LISTS = ("vertex_indices", "vertex_index")  # the names trimesh looks for
+
+
+def _read_ply(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """PLY (Turk's polygon file format), ASCII or binary: the header and an ASCII body's lines
+    checked here, the records read by trimesh."""
+    fmt, elements, body, header_lines = _ply_header(data, path)
+    _, vertex = elements.get("vertex", (0, {}))
+    if any(not isinstance(vertex.get(c), str) for c in "xyz"):
+        raise MeshError(path, f"PLY vertex element needs scalar x, y, z properties "
+                              f"(has {', '.join(vertex) or 'none'})")
+    n_faces, face = elements.get("face", (0, {}))
+    index_list = next((name for name in _PLY_FACE_LISTS if name in face), None)
+    if face and (index_list is None or not isinstance(face[index_list], tuple) or face[index_list][1][0] not in "iu"):
+        raise MeshError(path, "PLY face element has no vertex_indices list of integers")
+    if fmt == "ascii":
+        _check_ply_ascii(_decode_text(data[body:], path), elements, path, header_lines)
+    # fix_texture=False: trimesh would otherwise split vertices by texture coordinate.
+    hint = "" if fmt == "ascii" else ("; a count in the header is wrong, the file is truncated, or the faces "
+                                      "have different numbers of corners, which trimesh's binary reader cannot read")
+    loaded = _trimesh_read("ply", data, path, hint, fix_texture=False, skip_materials=True)
+    vertices = np.asarray(loaded.get("vertices", np.zeros((0, 3))), dtype=np.float64)
+    if n_faces == 0:
+        return vertices, np.zeros((0, 3), dtype=np.int64)
+    # The face lists as read, before trimesh triangulates them its own way (and out of file order).
+    try:
+        lists = loaded["metadata"]["_ply_raw"]["face"]["data"][index_list]
+    except (KeyError, TypeError, ValueError):  # trimesh drops an element whose records are missing
+        raise MeshError(path, f"truncated: the {n_faces} faces the header announces are missing") from None
+    if fmt != "ascii":
+        # trimesh reads every binary record as long as the first: the other lengths must agree.
+        counts, lists = lists["f0"], lists["f1"]
+        if (counts != lists.shape[1]).any():
+            raise MeshError(path, "binary PLY faces with different numbers of corners (trimesh reads "
+                                  "faces of one size only; triangulate the file first)")
+    if lists.dtype != object:  # (n, k); trimesh squeezes one face with two lists to 1-D
+        lists = lists.reshape(n_faces, -1)
+    return vertices, _triangulate(lists, path, lambda i: f"face {i}")
+
+
+def _ply_header(data: bytes, path: Path) -> tuple[str, dict, int, int]:
+    """``(format, elements, body offset, header line count)``, ``elements[name]`` being ``(count,
+    properties)`` and a property a numpy type code, or a ``(count type, item type)`` pair for a
+    list. The lines are split as trimesh splits them (at ``\\n``; the format on line 2; the end at
+    the first line naming ``end_header``), and checked more strictly."""
+    end = data.find(b"end_header")
+    if not data.startswith(b"ply") or end < 0:
+        raise MeshError(path, "not a PLY file (it must start with 'ply' and have an 'end_header' line)")
+    end = data.find(b"\n", end) + 1 or len(data)
+    try:
+        lines = [line.split() for line in data[:end].decode("ascii").rstrip("\n").split("\n")]
+    except UnicodeDecodeError:
+        raise MeshError(path, "PLY header contains non-ASCII bytes") from None
+    if lines[0] != ["ply"] or len(lines) < 3 or lines[1][:1] != ["format"]:
+        raise MeshError(path, "not a PLY file (it must start with a 'ply' line and a 'format' line)")
+    if len(lines[1]) != 3 or lines[1][1] not in _PLY_FORMATS:
+        raise MeshError(path, f"line 2: unknown PLY format {' '.join(lines[1][1:])[:60]!r}")
+    if lines[-1] != ["end_header"]:
+        raise MeshError(path, f"line {len(lines)}: malformed 'end_header' line")
+    elements: dict[str, tuple[int, dict]] = {}
+    for number, tokens in enumerate(lines[2:-1], start=3):
+        line = " ".join(tokens)[:60]
+        if tokens[:1] in (["comment"], ["obj_info"]):
+            continue
+        if len(tokens) == 3 and tokens[0] == "element" and tokens[2].isdigit() and tokens[1] not in elements:
+            elements[tokens[1]] = (int(tokens[2]), {})
+            properties = elements[tokens[1]][1]
+        elif tokens[:1] == ["property"] and elements and tokens[-1] not in properties:
+            if len(tokens) == 3 and tokens[1] in _PLY_TYPES:
+                properties[tokens[2]] = _PLY_TYPES[tokens[1]]
+            elif len(tokens) == 5 and tokens[1] == "list" and tokens[2] in _PLY_TYPES and tokens[3] in _PLY_TYPES \
+                    and _PLY_TYPES[tokens[2]][0] in "iu":
+                properties[tokens[4]] = (_PLY_TYPES[tokens[2]], _PLY_TYPES[tokens[3]])
+            else:
+                raise MeshError(path, f"line {number}: malformed property {line!r}")
+        else:
+            raise MeshError(path, f"line {number}: unexpected PLY header line {line!r}")
+    return lines[1][1], elements, end, len(lines)
+
+
+def _check_ply_ascii(text: str, elements: dict, path: Path, header_lines: int) -> None:
+    """An ASCII body line by line against the header, as trimesh takes it: one record per line
+    from the first, each with as many numbers as its properties say (a list: its length, then that
+    many items, whole numbers for an integer list); after the last record only blank lines."""
+    lines = text.splitlines()
+    total = sum(count for count, _ in elements.values())
+    announced = ", ".join(f"{count} {name}" for name, (count, _) in elements.items())
+    if len(lines) < total:
+        raise MeshError(path, f"truncated: header announces {total} element lines ({announced}), "
+                              f"the file has {len(lines)}")
+    extra = next((i for i in range(total, len(lines)) if lines[i].strip()), None)
+    if extra is not None:
+        raise MeshError(path, f"line {header_lines + 1 + extra}: data after the last element (a count in the "
+                              f"header is wrong: {announced})")
+    start = 0
+    for name, (count, properties) in elements.items():
+        for i in range(start, start + count):
+            where, tokens = f"line {header_lines + 1 + i}", lines[i].split()
+            try:
+                values = [float(t) for t in tokens]
+            except ValueError:
+                raise MeshError(path, f"{where}: {name} values expected, found {' '.join(tokens[:8])!r}") from None
+            pos = 0
+            for kind in properties.values():
+                if isinstance(kind, tuple):  # a list: its length, then its items
+                    k = values[pos] if pos < len(values) else -1.0
+                    items = values[pos + 1:pos + 1 + int(k)] if k >= 0 and k.is_integer() else None
+                    if items is None or len(items) < k or (kind[1][0] in "iu" and not all(v.is_integer() for v in items)):
+                        raise MeshError(path, f"{where}: malformed {name} {' '.join(tokens[:8])!r}")
+                    pos += int(k)
+                pos += 1
+            if pos < len(tokens):
+                raise MeshError(path, f"{where}: {name} has {len(tokens) - pos} values more than the header declares")
+            if pos > len(tokens):
+                raise MeshError(path, f"{where}: {name} has {len(tokens)} values, the header declares {pos}")
+        start += count
+
+
+# STL and point clouds --------------------------------------------------------------------------
+
+
+def _read_stl(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """STL, binary or ASCII, as trimesh reads it: a triangle soup, three vertices of its own per
+    face (an ASCII file may hold several solids)."""
+    announced = int.from_bytes(data[80:84], "little") if len(data) >= 84 else 0
+    binary = len(data) == 84 + 50 * announced  # trimesh's test
+    text = "" if binary else data.decode("utf-8", "replace").lower()
+    if "\x00" in text or "\ufffd" in text:
+        raise MeshError(path, f"not an STL file: neither binary ({len(data)} bytes, not 84 + 50 per "
+                              f"triangle for the {announced} it announces) nor text")
+    loaded = _trimesh_read("stl", data, path)
+    parts = loaded["geometry"].values() if "geometry" in loaded else [loaded]
+    vertices = np.concatenate([np.asarray(p["vertices"], np.float64).reshape(-1, 3) for p in parts] or [np.zeros((0, 3))])
+    if len(vertices) == 0:
+        raise MeshError(path, "no triangles (an ASCII STL has them between 'solid' and 'endsolid')")
+    # trimesh takes the numbers after each ASCII 'vertex' three by three: count the keywords.
+    if not binary and (text.count("vertex") != len(vertices) or 3 * text.count("endfacet") != len(vertices)):
+        raise MeshError(path, f"ASCII STL with {text.count('endfacet')} facets and {text.count('vertex')} 'vertex' "
+                              f"lines, {len(vertices)} vertices read: every facet needs 3 vertices of 3 numbers")
+    return vertices, np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
+
+
+def _read_xyz(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """A point cloud, one point per line: never a mesh (its lines are only counted for the message)."""
+    raise MeshError(path, f"{len(_data_lines(_decode_text(data, path)))} points and no faces: a triangle mesh is needed")
+
+
+# TOSCA -----------------------------------------------------------------------------------------
+
+
+def _read_vert_tri(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """TOSCA's native pair: ``name.vert`` (x y z rows) and ``name.tri`` (1-based i j k rows)."""
+    vert_path, tri_path = path.with_suffix(".vert"), path.with_suffix(".tri")
+    tables = []
+    for p, dtype, what in ((vert_path, np.float64, "vertex coordinates"), (tri_path, np.int64, "integer vertex indices")):
+        text = _decode_text(_read_bytes(p), p)
+        rows = [(n, line.split()) for n, line in enumerate(text.splitlines(), start=1) if line.strip()]
+        bad = [(n, t) for n, t in rows if len(t) != 3]
+        if bad:
+            raise MeshError(p, f"line {bad[0][0]}: expected 3 values, found {len(bad[0][1])}")
+        tables.append(_numbers([t for _, t in rows], [n for n, _ in rows], dtype, p, what).reshape(-1, 3))
+    vertices, faces = tables
+    return vertices, faces - 1
 
 
 # ----------------------------------------------------------------------------------------------
@@ -520,7 +436,3 @@ def save_mesh(mesh: Mesh, path: str | os.PathLike) -> None:
         trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).export(path, file_type="ply")
     else:
         raise MeshError(path, f"cannot write {ext or '(none)'!r}; expected one of {', '.join(WRITE_FORMATS)}")
-
-
-# ----------------------------------------------------------------------------------------------
-# Validation and repair
