@@ -216,3 +216,25 @@ def test_tosca_meshes_stay_below_the_denoising_threshold(tosca):
         mesh = load_mesh(path)
         _, steps, _ = denoise_mesh(mesh, 1.1)
         assert steps == 0, f"{path.name}: roughness {surface_roughness(mesh):.3f}"
+
+
+@pytest.mark.parametrize("order, fmt", [("<", "binary_little_endian"), (">", "binary_big_endian")])
+def test_binary_ply_with_triangles_and_quads_loads(tmp_path, order, fmt):
+    """Blender and others write binary PLY faces of mixed sizes, which trimesh's reader cannot."""
+    import struct
+
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0]], float)
+    faces = [[0, 1, 2, 3], [1, 4, 2]]
+    header = (f"ply\nformat {fmt} 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+              f"element face 2\nproperty list uchar int vertex_indices\nend_header\n").encode()
+    body = b"".join(struct.pack(order + "3f", *p) for p in vertices)
+    body += b"".join(struct.pack(order + "B", len(f)) + struct.pack(order + f"{len(f)}i", *f) for f in faces)
+    path = tmp_path / "mixed.ply"
+    path.write_bytes(header + body)
+    with pytest.warns(MeshWarning, match="split into triangles"):
+        mesh = load_mesh(path)
+    np.testing.assert_array_equal(mesh.vertices, vertices)
+    assert mesh.faces.tolist() == [[0, 1, 2], [0, 2, 3], [1, 4, 2]]
+    path.write_bytes(header + body[:-3])
+    with pytest.raises(MeshError, match="truncated"):
+        load_mesh(path)

@@ -58,6 +58,9 @@ def _add_config_options(parser: argparse.ArgumentParser) -> None:
                             "{\"mirror\": {\"samples\": 400}} in part; see darcyan.DarcyanConfig); options given beside it still apply")
     parser.add_argument("--repair", action="store_true", help="drop duplicate/degenerate faces and unreferenced vertices instead of refusing them")
     parser.add_argument("--no-cache", action="store_true", help="do not read or write the per-shape cache ($DARCYAN_CACHE)")
+    parser.add_argument("--threads", type=int, default=1, metavar="N",
+                        help="BLAS/OpenMP threads (default %(default)s: the work is not BLAS-bound, and more threads "
+                             "oversubscribe a busy machine; 0: the libraries' own default)")
 
 
 def _config(args: argparse.Namespace) -> DarcyanConfig:
@@ -111,40 +114,110 @@ def cmd_match(args: argparse.Namespace) -> int:
     config = _config(args)
     if args.jobs < 1:
         raise DarcyanError(f"--jobs must be at least 1, got {args.jobs}")
+    targets = args.targets
+    several = len(targets) > 1
+    if several and (args.plot or args.html or args.truth):
+        raise DarcyanError("--plot, --html and --truth take one target: match the targets one by one")
+    if several and args.dense and args.output is None:
+        raise DarcyanError("--dense with several targets writes one map per target: give -o FOLDER")
+    form = _output_format(args)
     cache = _cache(args)
     if args.truth:
         from .eval.metrics import read_truth, score_matches
 
         read_truth(args.truth)  # a malformed spec or file fails before any computation
     _picture_dependencies(args)
-    description_1, description_2 = describe_shapes([args.source, args.target], config, args.repair, cache, args.jobs)
-    _note_changes(description_1)
-    _note_changes(description_2)
-    correspondence = match_shapes(description_1, description_2, config)
-    shapes = score = None
-    if args.dense or args.plot or args.html or args.truth:  # prepared once for the dense map, score and pictures
-        shapes = [load_shape(path, config, args.repair, warn=False) for path in (args.source, args.target)]
-    if args.truth:
-        truth = read_truth(args.truth, description_1.n_input_vertices, description_2.n_input_vertices)
-        score = score_matches(shapes[0], shapes[1], correspondence, truth)
-        print(f"darcyan: {score.summary()}", file=sys.stderr)
-    if args.dense:
-        from .dense.maps import UNMAPPED, dense_map, dense_map_to_csv
+    say = _progress(args)
+    say(f"describing {1 + len(targets)} shapes" if several else "describing the two shapes")
+    descriptions = describe_shapes([args.source, *targets], config, args.repair, cache, args.jobs)
+    for description in descriptions:
+        _note_changes(description)
+    source_shape = None
+    results = []  # (target, correspondence, dense map or None)
+    for target, description in zip(targets, descriptions[1:]):
+        correspondence = match_shapes(descriptions[0], description, config)
+        shapes = score = dense = None
+        if args.dense or args.plot or args.html or args.truth:  # prepared once for the map, score and pictures
+            if source_shape is None:
+                source_shape = load_shape(args.source, config, args.repair, warn=False)
+            shapes = [source_shape, load_shape(target, config, args.repair, warn=False)]
+        if args.truth:
+            truth = read_truth(args.truth, descriptions[0].n_input_vertices, description.n_input_vertices)
+            score = score_matches(shapes[0], shapes[1], correspondence, truth)
+            print(f"darcyan: {score.summary()}", file=sys.stderr)
+        if args.dense:
+            from .dense.maps import UNMAPPED, dense_map
 
-        result = dense_map(shapes[0], shapes[1], correspondence)
-        left_out = int((result.target == UNMAPPED).sum())
-        if left_out:
-            print(f"darcyan: warning: {args.source}: {left_out} vertices outside the matched component "
-                  f"are written with target_vertex {UNMAPPED}", file=sys.stderr)
-        _write_text(dense_map_to_csv(result.target), args.output)
+            dense = dense_map(shapes[0], shapes[1], correspondence, progress=lambda stage: say(f"dense map: {stage}"))
+            left_out = int((dense.target == UNMAPPED).sum())
+            if left_out:
+                print(f"darcyan: warning: {args.source}: {left_out} vertices outside the matched component "
+                      f"are written with target_vertex {UNMAPPED}", file=sys.stderr)
+        if args.plot or args.html:
+            from .viz.scenes import match_scene
+
+            scene = match_scene(shapes[0], shapes[1], correspondence, config=config, score=score)
+            _pictures(scene, args.plot, args.html, "render_matches", "matches_html")
+        results.append((target, correspondence, dense))
+    if args.dense and several:
+        folder = Path(args.output)
+        folder.mkdir(parents=True, exist_ok=True)
+        for target, _, dense in results:
+            name = folder / f"{Path(target).stem}.{form}"
+            _write_text(_dense_text(args.source, target, dense.target, form), str(name))
+        say(f"{len(results)} dense maps written to {folder}")
+    elif args.dense:
+        _write_text(_dense_text(args.source, targets[0], results[0][2].target, form), args.output)
     else:
-        _write_text(correspondence.to_csv(), args.output)
-    if args.plot or args.html:
-        from .viz.scenes import match_scene
-
-        scene = match_scene(shapes[0], shapes[1], correspondence, config=config, score=score)
-        _pictures(scene, args.plot, args.html, "render_matches", "matches_html")
+        _write_text(_matches_text(args.source, [(t, c) for t, c, _ in results], form, several), args.output)
     return 0
+
+
+def _output_format(args: argparse.Namespace) -> str:
+    """``--format``, else ``json`` for an ``-o *.json``, else ``csv``."""
+    if args.format:
+        return args.format
+    return "json" if args.output and Path(args.output).suffix.lower() == ".json" else "csv"
+
+
+def _matches_text(source: str, pairs: list, form: str, several: bool) -> str:
+    """The matches of ``source`` with each ``(target, Correspondence)``: CSV (a leading
+    ``target`` column with several targets) or JSON (one object per target)."""
+    if form == "json":
+        import json
+
+        records = [{"source": str(source), "target": str(target),
+                    "matches": [{"source_vertex": int(s), "target_vertex": int(t), "distance": float(d)}
+                                for s, t, d in zip(c.source_vertex, c.target_vertex, c.distance)]}
+                   for target, c in pairs]
+        return json.dumps(records if several else records[0], indent=1) + "\n"
+    if not several:
+        return pairs[0][1].to_csv()
+    lines = ["target,source_vertex,target_vertex,distance"]
+    for target, c in pairs:
+        lines += [f"{target},{s},{t},{d:.6g}" for s, t, d in zip(c.source_vertex, c.target_vertex, c.distance)]
+    return "\n".join(lines) + "\n"
+
+
+def _dense_text(source: str, target: str, map_12, form: str) -> str:
+    from .dense.maps import dense_map_to_csv
+
+    if form == "json":
+        import json
+
+        return json.dumps({"source": str(source), "target": str(target),
+                           "target_vertex": [int(v) for v in map_12]}) + "\n"
+    return dense_map_to_csv(map_12)
+
+
+def _progress(args: argparse.Namespace):
+    """``say(text)``: a ``darcyan: ...`` line on stderr with the seconds so far, unless ``--quiet``."""
+    import time
+
+    start = time.perf_counter()
+    if getattr(args, "quiet", False):
+        return lambda text: None
+    return lambda text: print(f"darcyan: [{time.perf_counter() - start:5.1f} s] {text}", file=sys.stderr, flush=True)
 
 
 def _picture_dependencies(args: argparse.Namespace) -> None:
@@ -252,9 +325,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("match", help="match the feature points of two meshes",
                        description="Match the extremities of SOURCE to those of TARGET. Writes CSV "
                                    "source_vertex,target_vertex,distance (0-based vertex indices of the files).")
-    p.add_argument("source", help="mesh file (.off .obj .ply .vert/.tri)")
-    p.add_argument("target", help="mesh file (.off .obj .ply .vert/.tri)")
-    p.add_argument("-o", "--output", help="CSV file to write (default: stdout)")
+    p.add_argument("source", help="mesh file (.off .obj .ply .stl .vert/.tri)")
+    p.add_argument("targets", nargs="+", metavar="target", help="one or more mesh files, each matched with the source "
+                   "(described once)")
+    p.add_argument("-o", "--output", help="file to write (default: stdout); with several targets and --dense, a folder "
+                   "that gets one map per target")
+    p.add_argument("--format", choices=("csv", "json"), help="output format (default: json for -o *.json, else csv); "
+                   "with several targets the CSV gains a leading target column")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
     p.add_argument("--matching", choices=MATCHING_MODES,
                    help="nearest: the paper's nearest descriptor; one-to-one: optimal assignment; consistent: "
                         f"geodesic layout and orientation too (default {DarcyanConfig().matching})")
@@ -336,6 +414,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _thread_limit(threads: int):
+    """A context limiting BLAS/OpenMP thread pools to ``threads`` (0: leave them as they are)."""
+    import contextlib
+
+    if threads < 0:
+        raise DarcyanError(f"--threads must be 0 (the libraries' default) or more, got {threads}")
+    if threads == 0:
+        return contextlib.nullcontext()
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(threads)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -347,7 +438,8 @@ def main(argv: list[str] | None = None) -> int:
     warnings.simplefilter("ignore")  # library noise (numpy, trimesh) is not the user's business
     warnings.simplefilter("always", MeshWarning)
     try:
-        return args.func(args)
+        with _thread_limit(getattr(args, "threads", 0)):
+            return args.func(args)
     except DarcyanError as exc:
         print(f"darcyan: error: {exc}", file=sys.stderr)
         return EXIT_USAGE

@@ -272,7 +272,19 @@ def _read_ply(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     # fix_texture=False: trimesh would otherwise split vertices by texture coordinate.
     hint = "" if fmt == "ascii" else ("; a count in the header is wrong, the file is truncated, or the faces "
                                       "have different numbers of corners, which trimesh's binary reader cannot read")
-    loaded = _trimesh_read("ply", data, path, hint, fix_texture=False, skip_materials=True)
+    try:
+        loaded = _trimesh_read("ply", data, path, hint, fix_texture=False, skip_materials=True)
+    except MeshError:
+        if fmt == "ascii":
+            raise
+        loaded = None
+    if fmt != "ascii" and (loaded is None or (n_faces and not _uniform_binary_faces(loaded, index_list))):
+        # trimesh reads binary faces of one size only; Blender and others write triangles and
+        # quads mixed: those files are read record by record here.
+        records = _ply_binary_records(data, body, elements, fmt, path)
+        vertices = np.stack([records["vertex"][c] for c in "xyz"], axis=1).astype(np.float64)
+        lists = records.get("face", {}).get(index_list, [])
+        return vertices, _triangulate(lists, path, lambda i: f"face {i}")
     vertices = np.asarray(loaded.get("vertices", np.zeros((0, 3))), dtype=np.float64)
     if n_faces == 0:
         return vertices, np.zeros((0, 3), dtype=np.int64)
@@ -290,6 +302,52 @@ def _read_ply(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     if lists.dtype != object:  # (n, k); trimesh squeezes one face with two lists to 1-D
         lists = lists.reshape(n_faces, -1)
     return vertices, _triangulate(lists, path, lambda i: f"face {i}")
+
+
+def _uniform_binary_faces(loaded: dict, index_list: str) -> bool:
+    """True when trimesh read every binary face with the corner count it announces."""
+    try:
+        lists = loaded["metadata"]["_ply_raw"]["face"]["data"][index_list]
+        return bool((lists["f0"] == lists["f1"].shape[1]).all())
+    except (KeyError, TypeError, ValueError, IndexError):
+        return True  # nothing to compare: the checks below say what is wrong
+
+
+def _ply_binary_records(data: bytes, body: int, elements: dict, fmt: str, path: Path) -> dict:
+    """Every element of a binary PLY body: ``{element: {property: array or list of arrays}}``.
+    Elements of scalar properties are read at once; those with lists record by record."""
+    order = "<" if fmt == "binary_little_endian" else ">"
+    records, pos = {}, body
+
+    def take(kind: str, count: int):
+        nonlocal pos
+        size = np.dtype(kind).itemsize * count
+        if pos + size > len(data):
+            raise MeshError(path, f"truncated: the binary body ends inside element {name!r}")
+        values = np.frombuffer(data, order + kind, count, pos)
+        pos += size
+        return values
+
+    for name, (count, properties) in elements.items():
+        if all(isinstance(kind, str) for kind in properties.values()):
+            record = np.dtype([(p, order + kind) for p, kind in properties.items()])
+            if pos + record.itemsize * count > len(data):
+                raise MeshError(path, f"truncated: the binary body ends inside element {name!r}")
+            table = np.frombuffer(data, record, count, pos)
+            pos += record.itemsize * count
+            records[name] = {p: table[p] for p in properties}
+            continue
+        columns = {p: [] for p in properties}
+        for _ in range(count):
+            for p, kind in properties.items():
+                if isinstance(kind, str):
+                    columns[p].append(take(kind, 1)[0])
+                else:
+                    columns[p].append(take(kind[1], int(take(kind[0], 1)[0])))
+        records[name] = columns
+    if pos != len(data):
+        raise MeshError(path, f"{len(data) - pos} bytes after the last element the header announces")
+    return records
 
 
 def _ply_header(data: bytes, path: Path) -> tuple[str, dict, int, int]:

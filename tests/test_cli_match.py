@@ -1,0 +1,90 @@
+"""`darcyan match` for one source and many targets, its output formats, progress and threads."""
+
+import csv
+import io
+import json
+
+import numpy as np
+import pytest
+
+from darcyan.cli import main
+from darcyan.geometry import synthetic
+from darcyan.io.mesh_files import save_mesh
+
+SUBDIVISIONS = 4  # 2,562-vertex figures: fast
+
+
+@pytest.fixture(scope="module")
+def figures(tmp_path_factory):
+    """The figure in poses 0, 1 and 2 (one vertex numbering: the tips are the true matches)."""
+    folder = tmp_path_factory.mktemp("figures")
+    paths = []
+    for pose in (0, 1, 2):
+        paths.append(folder / f"figure{pose}.off")
+        save_mesh(synthetic.figure(pose, SUBDIVISIONS), paths[-1])
+    return paths
+
+
+@pytest.fixture(autouse=True)
+def private_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_one_source_against_many_targets_equals_the_pairs_one_by_one(capsys, figures):
+    code, out, err = run(capsys, "match", figures[0], figures[1], figures[2])
+    assert code == 0, err
+    rows = list(csv.DictReader(io.StringIO(out)))
+    assert list(rows[0]) == ["target", "source_vertex", "target_vertex", "distance"]
+    assert {r["target"] for r in rows} == {str(figures[1]), str(figures[2])}
+    for target in figures[1:]:
+        alone = list(csv.DictReader(io.StringIO(run(capsys, "match", figures[0], target)[1])))
+        mine = [{k: v for k, v in r.items() if k != "target"} for r in rows if r["target"] == str(target)]
+        assert mine == alone
+        # the poses share one numbering: each match lands on the limb of the source vertex's own
+        # copy (within 0.1 sqrt(area), about a hand's length; another tip is several times farther)
+        mesh = synthetic.figure(int(target.stem[-1]), SUBDIVISIONS)
+        gap = [np.linalg.norm(mesh.vertices[int(r["source_vertex"])] - mesh.vertices[int(r["target_vertex"])])
+               for r in alone]
+        assert max(gap) < 0.1 * np.sqrt(mesh.area())
+
+
+def test_json_output_by_suffix_or_format(capsys, figures, tmp_path):
+    path = tmp_path / "m.json"
+    assert run(capsys, "match", figures[0], figures[1], "-o", path)[0] == 0
+    record = json.loads(path.read_text())
+    assert record["source"] == str(figures[0]) and record["target"] == str(figures[1])
+    assert len(record["matches"]) == 5
+    csv_rows = list(csv.DictReader(io.StringIO(run(capsys, "match", figures[0], figures[1])[1])))
+    assert [int(m["target_vertex"]) for m in record["matches"]] == [int(r["target_vertex"]) for r in csv_rows]
+    code, out, _ = run(capsys, "match", figures[0], figures[1], figures[2], "--format", "json")
+    assert code == 0 and [r["target"] for r in json.loads(out)] == [str(figures[1]), str(figures[2])]
+
+
+def test_dense_maps_of_several_targets_go_to_a_folder_with_progress(capsys, figures, tmp_path):
+    folder = tmp_path / "maps"
+    code, _, err = run(capsys, "match", figures[0], figures[1], figures[2], "--dense", "-o", folder)
+    assert code == 0, err
+    assert "dense map: zoomout" in err  # progress lines on stderr
+    n = synthetic.figure(0, SUBDIVISIONS).n_vertices
+    for target in figures[1:]:
+        rows = np.loadtxt(folder / f"{target.stem}.csv", delimiter=",", skiprows=1, dtype=np.int64)
+        assert rows.shape == (n, 2) and np.array_equal(rows[:, 0], np.arange(n))
+        assert (rows[:, 1] == rows[:, 0]).mean() > 0.5  # one numbering: most vertices map onto themselves
+    code, _, err = run(capsys, "match", figures[0], figures[1], "--dense", "-o", tmp_path / "q.csv", "--quiet")
+    assert code == 0 and "dense map" not in err
+    code, _, err = run(capsys, "match", figures[0], figures[1], figures[2], "--dense")
+    assert code == 2 and "-o FOLDER" in err
+
+
+def test_pictures_and_truth_take_one_target_and_threads_are_checked(capsys, figures, tmp_path):
+    code, _, err = run(capsys, "match", figures[0], figures[1], figures[2], "--truth", "identity")
+    assert code == 2 and "one target" in err
+    assert run(capsys, "match", figures[0], figures[1], "--threads", "2")[0] == 0
+    code, _, err = run(capsys, "match", figures[0], figures[1], "--threads", "-1")
+    assert code == 2 and "--threads" in err
