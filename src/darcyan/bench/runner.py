@@ -162,9 +162,11 @@ def default_pairs(dataset: Dataset) -> list:
     return [(a, b) for names in dataset.classes.values() for a in names for b in names if a != b]
 
 
-def read_pairs(path: str | os.PathLike, dataset: Dataset) -> list:
-    """``source<TAB>target`` lines (blank lines and ``#`` comments skipped; names with or
-    without the mesh suffix)."""
+def read_pairs(path: str | os.PathLike, dataset: Dataset, groups: dict | None = None) -> list:
+    """``source<TAB>target[<TAB>group]`` lines (blank lines and ``#`` comments skipped; names with
+    or without the mesh suffix). A third column names the pair's group (e.g. ``same`` and
+    ``two people`` for FAUST), recorded in ``groups`` ``{(source, target): group}``; results are
+    then also given per group (a pair without one is in its class's group)."""
     path = Path(path)
     try:
         text = path.read_text()
@@ -175,17 +177,19 @@ def read_pairs(path: str | os.PathLike, dataset: Dataset) -> list:
         line = line.strip()
         if not line or line.startswith("#"):
             continue
-        parts = line.split("\t") if "\t" in line else line.split()
-        if len(parts) != 2:
-            raise DarcyanError(f"{path}: line {number}: expected 'source<TAB>target', got {line!r}")
+        parts = line.split("\t") if "\t" in line else line.split(maxsplit=2)
+        if len(parts) not in (2, 3) or not all(p.strip() for p in parts):
+            raise DarcyanError(f"{path}: line {number}: expected 'source<TAB>target[<TAB>group]', got {line!r}")
         names = []
-        for part in parts:
+        for part in parts[:2]:
             name = part.strip()
             stem = Path(name).stem if Path(name).suffix.lower() in MESH_SUFFIXES else name
             if stem not in dataset.shapes:
                 raise DarcyanError(f"{path}: line {number}: no mesh named {name!r} in {dataset.root}")
             names.append(stem)
         pairs.append(tuple(names))
+        if len(parts) == 3 and groups is not None:
+            groups[tuple(names)] = parts[2].strip()
     if not pairs:
         raise DarcyanError(f"{path}: no pairs in this file")
     return pairs
@@ -498,7 +502,7 @@ def _sparse_records(job: dict, target: Shape) -> list:
         score = score_pair(target.solver, matched, true_t, sym_t, target_features, settings.threshold,
                            match_rows=rows, fields=fields)
         records.append({
-            "method": method, "class": job["cls"], "source": job["source"], "target": job["target"],
+            "method": method, "class": job["cls"], "group": job["group"], "source": job["source"], "target": job["target"],
             "features": score.features, "matches": len(matched),
             "correct": int((score.errors <= settings.threshold).sum()),
             "source_vertex": features[rows].tolist(), "target_vertex": target.mesh.input_index[matched].tolist(),
@@ -558,7 +562,8 @@ def _dense_records(job: dict, target: Shape) -> list:
         errors = score.errors
         mapped = np.isfinite(errors)
         records.append({
-            "kind": DENSE, "method": method, "class": job["cls"], "source": job["source"], "target": job["target"],
+            "kind": DENSE, "method": method, "class": job["cls"], "group": job["group"], "source": job["source"],
+            "target": job["target"],
             "samples": int(len(errors)), "within": int((errors <= settings.threshold).sum()), "rate": score.rate,
             "mapped": int(mapped.sum()), "mean_error": float(errors[mapped].mean()) if mapped.any() else None,
             "curve": score.curve().tolist(), "seconds": seconds, **info})
@@ -714,7 +719,8 @@ def run_bench(dataset_dir: str | os.PathLike, out: str | os.PathLike, methods=("
     if dense and not (isinstance(dense_samples, (int, np.integer)) and dense_samples >= 1):
         raise DarcyanError(f"dense samples must be a positive integer, got {dense_samples}")
     dataset = discover_dataset(dataset_dir)
-    pairs = read_pairs(pairs_file, dataset) if pairs_file else default_pairs(dataset)
+    groups: dict = {}
+    pairs = read_pairs(pairs_file, dataset, groups) if pairs_file else default_pairs(dataset)
     if not pairs:
         raise DarcyanError(f"{dataset.root}: no pairs (every class has a single shape)")
     settings = BenchSettings(methods, float(threshold), config, laplacian, repair, bool(dense), int(dense_samples))
@@ -772,7 +778,8 @@ def run_bench(dataset_dir: str | os.PathLike, out: str | os.PathLike, methods=("
             sym = dataset.vts(t, mirror=True)
             truth = {"kind": "vts", "target_vts": str(dataset.vts(t)), "target_sym": str(sym) if sym.is_file() else None,
                      "source_vts": str(dataset.vts(s))}
-        pair_jobs.append(dict(common, source=s, target=t, cls=shape_class(s), methods=ms, dense_methods=ds,
+        pair_jobs.append(dict(common, source=s, target=t, cls=shape_class(s), group=groups.get((s, t), shape_class(s)),
+                              methods=ms, dense_methods=ds,
                               source_path=str(dataset.shapes[s]), target_path=str(dataset.shapes[t]),
                               source_rec=_slim(shapes[s]), target_rec=_slim(shapes[t]), truth=truth))
     computed = 0
@@ -792,10 +799,10 @@ def run_bench(dataset_dir: str | os.PathLike, out: str | os.PathLike, methods=("
                 os.fsync(fh.fileno())
                 bar.update()
                 if time.perf_counter() - last_write >= WRITE_INTERVAL:
-                    write_outputs(out, dataset, settings, info, journal, pairs, time.perf_counter() - wall)
+                    write_outputs(out, dataset, settings, info, journal, pairs, time.perf_counter() - wall, groups)
                     last_write = time.perf_counter()
     finally:
-        results = write_outputs(out, dataset, settings, info, journal, pairs, time.perf_counter() - wall)
+        results = write_outputs(out, dataset, settings, info, journal, pairs, time.perf_counter() - wall, groups)
     if plots:
         write_plots(results, out)
     return BenchResult(out, results, computed, reused, time.perf_counter() - wall)
@@ -906,7 +913,11 @@ def summarize_records(records: list, threshold: float) -> dict:
             values = [c[key] for c in classes.values() if c[key] is not None]
             overall[f"{key}_class_mean"] = float(np.mean(values)) if values else None
         overall["pair_seconds"] = float(sum(r["seconds"] for r in rows))
-        methods[method] = {"overall": overall, "classes": classes}
+        groups = {}
+        for group in sorted({r.get("group", r["class"]) for r in rows}):
+            chosen = [s for s, r in zip(scores, rows) if r.get("group", r["class"]) == group]
+            groups[group] = summarize(chosen, threshold)
+        methods[method] = {"overall": overall, "classes": classes, "groups": groups}
     return methods
 
 
@@ -927,7 +938,9 @@ def summarize_dense(records: list) -> dict:
         classes = {cls: _pool_dense([r for r in rows if r["class"] == cls]) for cls in sorted({r["class"] for r in rows})}
         overall = _pool_dense(rows)
         overall["rate_class_mean"] = float(np.mean([c["rate"] for c in classes.values()])) if classes else None
-        out[method] = {"overall": overall, "classes": classes, "pairs": rows}
+        groups = {g: _pool_dense([r for r in rows if r.get("group", r["class"]) == g])
+                  for g in sorted({r.get("group", r["class"]) for r in rows})}
+        out[method] = {"overall": overall, "classes": classes, "groups": groups, "pairs": rows}
     return out
 
 
@@ -945,10 +958,13 @@ def _pool_dense(rows: list) -> dict:
 
 
 def write_outputs(out: Path, dataset: Dataset, settings: BenchSettings, info: dict, journal: list, pairs: list,
-                  wall_seconds: float) -> dict:
-    """Rewrite results.json, pairs.csv and report.md from the journal (the pairs of this run)."""
+                  wall_seconds: float, groups: dict | None = None) -> dict:
+    """Rewrite results.json, pairs.csv and report.md from the journal (the pairs of this run;
+    ``groups`` ``{(source, target): group}``, else each pair in its class's group)."""
     pair_set = set(pairs)
-    records = [r for r in journal if (r["source"], r["target"]) in pair_set]
+    groups = groups or {}
+    records = [dict(r, group=groups.get((r["source"], r["target"]), r["class"]))  # this run's groups
+               for r in journal if (r["source"], r["target"]) in pair_set]
     order = {p: i for i, p in enumerate(pairs)}
     method_order = {m: i for i, m in enumerate(METHODS)}
     records.sort(key=lambda r: (method_order.get(r["method"], len(METHODS)), order[(r["source"], r["target"])]))
@@ -1044,6 +1060,7 @@ def report_markdown(results: dict) -> str:
                          f"{_fmt(m['overall']['repeatability_class_mean'])}. 'seconds' is the per-pair matching "
                          f"time (for pyfm the whole functional-map pipeline; per-shape work is cached and not counted).")
     lines += _dense_report(results)
+    lines += _group_report(results)
     mirror = results.get("mirror", {})
     if mirror:
         lines += ["", "## Mirror ground truth", ""]
@@ -1066,6 +1083,32 @@ def report_markdown(results: dict) -> str:
                     lines.append(f"| {cls} | {v['shape']} | {_fmt(v['residual'], 4)} | {v['samples']} | "
                                  f"{_fmt(v['median_error'], 4)} | {_pct(v['within_threshold'])} |")
     return "\n".join(lines) + "\n"
+
+
+def _group_report(results: dict) -> list:
+    """Sparse and dense figures per group of pairs (``--pairs`` third column), when the groups
+    are not simply the classes."""
+    methods, dense = results["methods"], results.get("dense") or {}
+    names = sorted({g for m in list(methods.values()) + list(dense.values()) for g in m.get("groups", {})})
+    classes = {c for m in methods.values() for c in m["classes"]}
+    if not names or set(names) <= classes:
+        return []
+    lines = ["", "## Per group", "",
+             "Sparse: strict rate, rate allowing flips, mean geodesic error of the matches (sqrt(area) units); "
+             "dense: share of sampled vertices within the threshold and their mean geodesic error.", "",
+             "| group | method | pairs | sparse rate | rate_sym | sparse mean error | dense within | dense mean error |",
+             "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for group in names:
+        for name in dict.fromkeys(list(methods) + list(dense)):
+            s = methods.get(name, {}).get("groups", {}).get(group)
+            d = dense.get(name, {}).get("groups", {}).get(group)
+            if s is None and d is None:
+                continue
+            pairs = s["pairs"] if s else d["pairs"]
+            lines.append(f"| {group} | {name} | {pairs} | {_pct(s['rate']) if s else ''} | "
+                         f"{_pct(s['rate_sym']) if s else ''} | {_fmt(s['mean_error']) if s else ''} | "
+                         f"{_pct(d['rate']) if d else ''} | {_fmt(d['mean_error']) if d else ''} |")
+    return lines
 
 
 def _dense_report(results: dict) -> list:
@@ -1117,7 +1160,46 @@ def write_plots(results: dict, out: Path) -> list:
         written += [plot_rates(results, out / "rates.png"), plot_curves(results, out / "curve.png")]
     if results.get("dense"):
         written.append(plot_dense_curves(results, out / "dense_curve.png"))
+    if _group_report(results):
+        written.append(plot_group_curves(results, out / "group_curves.png"))
     return written
+
+
+GROUP_LINESTYLES = ("-", "--", ":", "-.")
+
+
+def plot_group_curves(results: dict, path: Path) -> Path:
+    """Cumulative error per group of pairs, one colour per method and one line style per group:
+    the sparse matches on the left, the dense maps (when the run has them) on the right."""
+    from ..viz import style
+
+    taus = np.asarray(results["taus"])
+    parts = [("sparse matches", results["methods"], "matches")]
+    if results.get("dense"):
+        parts.append(("dense maps", results["dense"], "sampled vertices"))
+    with style.context():
+        fig, _ = style.figure((6.0 * len(parts), 4.0))
+        fig.clf()  # one panel per part
+        axes = [fig.add_subplot(1, len(parts), i + 1) for i in range(len(parts))]
+        for ax, (title, methods, what) in zip(axes, parts):
+            groups = sorted({g for m in methods.values() for g in m.get("groups", {})})
+            for name, m in methods.items():
+                for i, group in enumerate(groups):
+                    g = m.get("groups", {}).get(group)
+                    if g is None:
+                        continue
+                    ax.plot(taus, np.asarray(g["curve"]) * 100, color=style.method_colour(name),
+                            linestyle=GROUP_LINESTYLES[i % len(GROUP_LINESTYLES)],
+                            label=f"{name}, {group} ({_pct(g['rate'])})")
+            ax.axvline(results["threshold"], color=style.NEUTRAL["edge"], linewidth=0.8, linestyle=":")
+            ax.set_xlim(taus[0], taus[-1])
+            ax.set_ylim(0, 100)
+            ax.set_xlabel("geodesic error / sqrt(area)")
+            ax.set_ylabel(f"{what} with error <= threshold (%)")
+            ax.set_title(f"{Path(results['dataset']).name}: {title} per group")
+            ax.legend(fontsize="small", loc="lower right")
+        style.save(fig, path)
+    return path
 
 
 def plot_rates(results: dict, path: Path) -> Path:

@@ -1,0 +1,53 @@
+"""darcyan bench reports groups of pairs named by a third column of --pairs."""
+
+import json
+
+import pytest
+
+from darcyan.bench.runner import discover_dataset, read_pairs, run_bench
+from darcyan.errors import DarcyanError
+from darcyan.geometry import synthetic
+from darcyan.io.mesh_files import save_mesh
+
+
+@pytest.fixture(scope="module")
+def figures(tmp_path_factory):
+    """The built-in figure in three poses (one vertex numbering: identity ground truth)."""
+    folder = tmp_path_factory.mktemp("figures")
+    for pose in (0, 1, 2):
+        save_mesh(synthetic.figure(pose, 4), folder / f"figure{pose}.off")
+    return folder
+
+
+def test_pairs_file_third_column_names_groups(figures, tmp_path):
+    pairs = tmp_path / "pairs.txt"
+    pairs.write_text("figure0\tfigure1\tnear\nfigure0\tfigure2\tfar away\nfigure1\tfigure2\n")
+    groups = {}
+    found = read_pairs(pairs, discover_dataset(figures), groups)
+    assert found == [("figure0", "figure1"), ("figure0", "figure2"), ("figure1", "figure2")]
+    assert groups == {("figure0", "figure1"): "near", ("figure0", "figure2"): "far away"}
+    pairs.write_text("figure0\tfigure1\tnear\textra\n")
+    with pytest.raises(DarcyanError, match="line 1"):
+        read_pairs(pairs, discover_dataset(figures), {})
+
+
+@pytest.mark.slow
+def test_results_and_report_per_group(figures, tmp_path):
+    pairs = tmp_path / "pairs.txt"
+    pairs.write_text("figure0\tfigure1\tnear\nfigure0\tfigure2\tfar\nfigure1\tfigure2\tfar\n")
+    result = run_bench(figures, tmp_path / "out", pairs_file=pairs, cache_dir=tmp_path / "cache", progress=False,
+                       dense=True, dense_samples=200)
+    results = json.loads((tmp_path / "out" / "results.json").read_text())
+    sparse = results["methods"]["darcyan"]
+    assert sorted(sparse["groups"]) == ["far", "near"]
+    assert sparse["groups"]["near"]["pairs"] == 1 and sparse["groups"]["far"]["pairs"] == 2
+    # the groups partition the pairs: their matches add up to the whole run's
+    assert sum(g["matches"] for g in sparse["groups"].values()) == sparse["overall"]["matches"]
+    for g in sparse["groups"].values():
+        assert 0 <= g["mean_error"] < 0.25 and len(g["curve"]) == len(results["taus"])
+    dense = results["dense"]["darcyan"]["groups"]
+    assert dense["far"]["samples"] == 2 * dense["near"]["samples"] == 400
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert "## Per group" in report and "| near | darcyan | 1 |" in report
+    assert (tmp_path / "out" / "group_curves.png").stat().st_size > 10_000
+    assert result.computed == 6  # three sparse and three dense records
