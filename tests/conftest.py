@@ -1,4 +1,14 @@
-"""Shared fixtures: analytic meshes built by the package, and the TOSCA data when present."""
+"""Shared fixtures: analytic meshes built by the package, and the TOSCA data when present.
+
+Markers (declared in pyproject.toml):
+
+* ``data``: added here, at collection, to every test that uses the ``tosca`` fixture, directly or
+  through another fixture; that fixture is the only way a test reaches ``../shared/data``
+  (tests/test_markers.py checks both). Nothing to write by hand.
+* ``slow``: written by hand (``@pytest.mark.slow``) on every test over about ``SLOW_SECONDS``, so
+  that ``python -m pytest -q -m "not slow"`` stays under two minutes. A run lists at its end the
+  unmarked tests that took longer (setup included): mark them, or make them faster.
+"""
 
 from __future__ import annotations
 
@@ -11,6 +21,30 @@ import pytest
 from darcyan.geometry import synthetic
 
 REPO = Path(__file__).resolve().parents[1]
+SLOW_SECONDS = 5.0
+
+
+@pytest.hookimpl(tryfirst=True)  # before ``-m`` deselects by marker
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if "tosca" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.data)
+
+
+_UNMARKED_SECONDS: dict = {}  # node id -> setup + call seconds, for tests without the slow marker
+
+
+def pytest_runtest_makereport(item, call):
+    if call.when in ("setup", "call") and item.get_closest_marker("slow") is None:
+        _UNMARKED_SECONDS[item.nodeid] = _UNMARKED_SECONDS.get(item.nodeid, 0.0) + call.duration
+
+
+def pytest_terminal_summary(terminalreporter):
+    over = sorted(((s, n) for n, s in _UNMARKED_SECONDS.items() if s > SLOW_SECONDS), reverse=True)
+    if over:
+        terminalreporter.section(f"over {SLOW_SECONDS:g} s without @pytest.mark.slow (setup included)")
+        for seconds, nodeid in over:
+            terminalreporter.write_line(f"{seconds:6.1f} s  {nodeid}")
 
 
 def data_dir() -> Path:
@@ -51,6 +85,14 @@ def correct_matches(folder: Path, a: str, b: str, cache, config=None, threshold:
     """(correct, all) matches of ``a`` -> ``b`` in ``folder`` (tosca-5k) by its vts ground truth:
     Euclidean error under ``threshold`` times sqrt(area) (0.1, about a hand's length: a swapped
     hand or foot is ~10x farther)."""
+    pairs, errors = match_errors(folder, a, b, cache, config)
+    return int((errors < threshold).sum()), len(pairs)
+
+
+def match_errors(folder: Path, a: str, b: str, cache, config=None) -> tuple[list, np.ndarray]:
+    """The matches of ``a`` -> ``b`` in ``folder`` (tosca-5k) as (source, target) vertex pairs,
+    and each one's Euclidean distance to its true counterpart by the vts ground truth (the
+    target's vertex on the line of ``a``'s vts nearest the source vertex), over sqrt(area)."""
     from scipy.spatial import cKDTree
 
     from darcyan import DarcyanConfig, describe_shape, match_shapes
@@ -64,4 +106,5 @@ def correct_matches(folder: Path, a: str, b: str, cache, config=None, threshold:
     vts_1, vts_2 = read_vts(folder / "corres" / f"{a}.vts"), read_vts(folder / "corres" / f"{b}.vts")
     line = cKDTree(mesh_1.vertices[vts_1]).query(mesh_1.vertices[matches.source_vertex])[1]
     error = np.linalg.norm(mesh_2.vertices[vts_2[line]] - mesh_2.vertices[matches.target_vertex], axis=1)
-    return int((error < threshold * np.sqrt(mesh_2.area())).sum()), len(matches)
+    pairs = [(int(s), int(t)) for s, t in zip(matches.source_vertex, matches.target_vertex)]
+    return pairs, error / np.sqrt(mesh_2.area())

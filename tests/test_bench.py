@@ -213,6 +213,7 @@ def test_hks_and_wks_match_the_figures_limb_tips(method):
     np.testing.assert_array_equal(matches.target, np.arange(len(tips)))  # every tip to itself
 
 
+@pytest.mark.slow
 def test_pyfm_maps_a_shape_onto_itself(tmp_path):
     pytest.importorskip("pyFM", reason="pyfmaps not installed (extra [pyfm])")
     mesh, _ = normalize_mesh(synthetic.figure(0, subdivisions=3))
@@ -238,7 +239,7 @@ REGRESSION_PAIRS = (("cat0", "cat1"), ("cat0", "cat10"), ("cat0", "cat2"),
                     ("wolf0", "wolf1"), ("wolf0", "wolf2"), ("wolf1", "wolf2"))
 
 
-@pytest.mark.data
+@pytest.mark.slow
 def test_darcyan_rate_on_tosca_5k_stays_above_the_floor(tosca, tmp_path, bench_cache):
     pairs = tmp_path / "pairs.txt"
     listed = {tuple(line.split("\t")) for line in (tosca / "tosca-5k" / "test_pairs.txt").read_text().splitlines()}
@@ -255,7 +256,6 @@ def test_darcyan_rate_on_tosca_5k_stays_above_the_floor(tosca, tmp_path, bench_c
         assert check["within_threshold"] >= 0.95, check
 
 
-@pytest.mark.data
 def test_mirror_of_tosca_hires_agrees_with_tosca_5k_sym_vts(tosca):
     """tosca-5k keeps tosca-hires' frame: its .sym.vts, carried to hires by nearest points, checks
     the mirror map derived on hires (identity data, no .sym.vts)."""
@@ -288,6 +288,7 @@ def test_mirror_of_tosca_hires_agrees_with_tosca_5k_sym_vts(tosca):
 DENSE_KEYS = ("pairs", "failed", "samples", "within", "rate", "mean_error", "curve", "seconds", "seconds_per_pair")
 
 
+@pytest.mark.slow
 def test_dense_added_to_a_sparse_run_by_resume(capsys, tmp_path, figures):
     """Identity ground truth: --resume --dense on a finished sparse run computes only the dense maps."""
     out, pairs = tmp_path / "out", tmp_path / "pairs.txt"
@@ -322,7 +323,7 @@ DENSE_SAMPLES = 300
 DENSE_FLOOR, DENSE_MARGIN, DENSE_MAX_MEAN = 0.880, 0.05, 0.05
 
 
-@pytest.mark.data
+@pytest.mark.slow
 def test_dense_bench_on_tosca_5k(capsys, tosca, tmp_path, bench_cache):
     methods = ("darcyan", "pyfm") if _installed("pyFM") else ("darcyan",)  # pyfm: pyFM's own pipeline
     out, pairs = tmp_path / "out", tmp_path / "pairs.txt"

@@ -46,6 +46,7 @@ def tip_correspondence(source_tips, target_tips):
     return Correspondence(np.asarray(source_tips), np.asarray(target_tips), np.zeros(n), None)
 
 
+@pytest.mark.slow
 def test_dense_map_on_the_figure_is_mostly_within_the_threshold(figure_pair):
     shape_1, shape_2, matches = figure_pair
     result = dense_map(shape_1, shape_2, matches, FAST)
@@ -68,6 +69,7 @@ def test_a_wrong_match_is_left_out_of_the_landmarks(figure_pair):
     assert sorted(map(tuple, result.landmarks.tolist())) == sorted(zip(tips.tolist(), tips.tolist()))
 
 
+@pytest.mark.slow
 def test_landmarks_decide_the_map(figure_pair):
     """Matching every tip to the wrong tip gives a wrong map: the landmarks are what it follows."""
     shape_1, shape_2, _ = figure_pair
@@ -78,6 +80,7 @@ def test_landmarks_decide_the_map(figure_pair):
     assert score.rate < 0.5
 
 
+@pytest.mark.slow
 def test_input_numbering_and_left_out_vertices():
     """A renumbered target and a source with a stray component: the map speaks the files' numbering."""
     config = DarcyanConfig()
@@ -164,6 +167,7 @@ def small_pose_files(tmp_path, monkeypatch):
     return paths
 
 
+@pytest.mark.slow
 def test_cli_dense_writes_one_row_per_source_vertex(small_pose_files, tmp_path, capsys):
     out_file = tmp_path / "map.csv"
     code = main(["match", *map(str, small_pose_files), "--dense", "-o", str(out_file)])
@@ -191,6 +195,7 @@ def test_cli_dense_error_is_one_line(tmp_path, capsys):
     assert err.startswith("darcyan: error:") and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_pyfm_method_with_darcyan_landmarks():
     """Approach (a): pyFM's functional map with the matches as landmarks, refined by its ZoomOut.
 

@@ -212,7 +212,9 @@ def test_noise_is_detected_and_the_true_area_recovered(sphere):
 
 def test_tosca_meshes_stay_below_the_denoising_threshold(tosca):
     """Clean scanned-quality meshes are analysed as they are (the default's results do not move)."""
-    for path in sorted((tosca / "tosca-5k").glob("*.off")):
+    paths = sorted((tosca / "tosca-5k").glob("*.off"))
+    assert paths, tosca / "tosca-5k"
+    for path in paths:
         mesh = load_mesh(path)
         _, steps, _ = denoise_mesh(mesh, 1.1)
         assert steps == 0, f"{path.name}: roughness {surface_roughness(mesh):.3f}"

@@ -51,7 +51,7 @@ def test_proxy_distance_field_is_close_to_great_circle_arcs(sphere):
     assert np.median(np.abs(d - arc)) < edge
 
 
-@pytest.mark.data
+@pytest.mark.slow
 def test_feature_points_found_with_a_proxy_repeat_across_poses(tosca, tmp_path):
     # tosca-5k michael with a 1500-vertex proxy standing in for its 5000 vertices: the feature
     # points must repeat across poses nearly as well as without a proxy (0.97 on these pairs).

@@ -18,6 +18,7 @@ def _same_vertex(shape_1, shape_2):
     return where(shape_1), where(shape_2)
 
 
+@pytest.mark.slow
 def test_orientation_agreement_is_plus_one_for_a_motion_and_minus_one_for_a_reflection(figure_poses):
     figure = figure_poses[0]
     moved = Mesh(figure.vertices @ random_rotation(3).T + [1.0, -2.0, 0.5], figure.faces)
@@ -55,7 +56,7 @@ def test_handedness_of_a_mirror_symmetric_tip_is_zero():
     assert handedness(chiral, chiral)[0, 0] == pytest.approx(1.0)
 
 
-@pytest.mark.data
+@pytest.mark.slow
 def test_a_hand_in_another_pose_reads_as_the_same_hand_and_in_a_mirror_as_the_other(tosca):
     """tosca-hires michael0 against michael1 (vertex i is the same body point in both) and
     against michael1 reflected: the feature points on hands and feet that are chiral enough to
@@ -87,7 +88,7 @@ HUMAN_PAIRS = (("michael0", "michael2"), ("michael18", "michael3"), ("michael12"
                ("michael12", "michael9"), ("michael12", "michael18"))
 
 
-@pytest.mark.data
+@pytest.mark.slow
 def test_humans_keep_left_and_right(tosca, tmp_path):
     from darcyan.io.cache import ShapeCache
 
@@ -97,22 +98,26 @@ def test_humans_keep_left_and_right(tosca, tmp_path):
     assert total >= 20 and correct / total >= 0.9, (correct, total)
 
 
-@pytest.mark.data
+@pytest.mark.slow
 def test_handedness_undoes_hand_and_foot_swaps_the_mirror_test_missed(tosca, tmp_path):
-    """tosca-5k pairs whose hands or feet go to the other side without handedness (3 of 5 right);
-    handedness sets them right. (Of the 422 michael and david pairs of tosca-5k, 4 change so.)"""
+    """tosca-5k pairs whose hands or feet go to the other side without handedness; handedness
+    sets them right. By the vts ground truth: with it every match is right, without it fewer are.
+    (Of the 422 michael and david pairs of tosca-5k, 4 change so.)"""
     from darcyan.io.cache import ShapeCache
 
     cache = ShapeCache(tmp_path / "cache")
-    pairs = {("michael11", "michael19"): 3, ("michael19", "michael17"): 3}
-    for a, b in pairs:
-        assert correct_matches(tosca / "tosca-5k", a, b, cache) == (5, 5), (a, b)
+    pairs = (("michael11", "michael19"), ("michael19", "michael17"))
+    with_handedness = {(a, b): correct_matches(tosca / "tosca-5k", a, b, cache) for a, b in pairs}
+    for (a, b), (correct, total) in with_handedness.items():
+        assert correct == total >= 4, (a, b, correct, total)  # head, hands and feet: not an empty success
     config = DarcyanConfig()
-    without = config.replace(mirror=dataclasses.replace(config.mirror, handedness_weight=0.0))
-    for (a, b), right in pairs.items():
-        assert correct_matches(tosca / "tosca-5k", a, b, cache, without) == (right, 5), (a, b)
+    without_handedness = config.replace(mirror=dataclasses.replace(config.mirror, handedness_weight=0.0))
+    for (a, b), (correct, _) in with_handedness.items():
+        without, _ = correct_matches(tosca / "tosca-5k", a, b, cache, without_handedness)
+        assert without < correct, (a, b, without, correct)
 
 
+@pytest.mark.slow
 def test_true_matching_ranked_below_the_eighth_candidate_is_still_found(tosca, tmp_path):
     """In these tosca-5k dog pairs the layout score ranks the true matching of all six feature
     points below the eighth candidate (a non-repeatable point's place moves it down); the mirror

@@ -92,7 +92,6 @@ def test_match_picture_one_marker_per_pair_on_each_shape(poses, tips, tmp_path):
         for colour in viz.match_colours(len(tips)):
             found = blobs(panel, rgb(colour))
             assert len(found) == 1, (side, colour, found)
-    assert picture.seconds < 30
 
 
 def test_match_picture_marks_wrong_matches(poses, tips, tmp_path):
