@@ -155,14 +155,18 @@ def test_non_manifold_edge_is_refused():
         prepare_mesh(Mesh(vertices, faces))
 
 
-def test_bow_tie_vertex_is_refused():
+def test_bow_tie_vertex_is_split_with_a_warning():
     second = TETRA_V + [3, 0, 0]
     second[0] = TETRA_V[1]  # share vertex 1 only
     vertices = np.vstack([TETRA_V, second[1:]])
     f2 = TETRA_F.copy()
     f2 = np.where(f2 == 0, 1, f2 + 3)
-    with pytest.raises(MeshError, match="non-manifold vertices"):
-        prepare_mesh(Mesh(vertices, np.vstack([TETRA_F, f2])))
+    with pytest.warns(MeshWarning) as caught:
+        mesh, _ = prepare_mesh(Mesh(vertices, np.vstack([TETRA_F, f2])))
+    messages = [str(w.message) for w in caught]
+    assert len(messages) == 2 and "split 1 non-manifold vertices" in messages[0]
+    assert "2 connected components" in messages[1]  # the two tetrahedra come apart
+    np.testing.assert_array_equal(mesh.input_index, [4, 5, 6, 1])  # the larger one; its copy of 1 last
 
 
 def test_several_components_keep_the_largest_with_a_warning():

@@ -8,7 +8,8 @@
   uncut pose keeps the correct matches of the extremities the cut did not touch.
 * Repair: duplicate and zero-area faces, unreferenced vertices and flipped faces are fixed by
   ``--repair`` with one note per change and results still numbered as in the input file;
-  non-manifold edges stay an error; with several components the largest is used with a warning.
+  a fin on an edge (a non-manifold edge) is split off; with several components the largest is
+  used with a warning.
 * Noise: vertex noise that crumples the surface is detected, said in a warning, and smoothed away
   before analysis; the matches stay correct where the unsmoothed analysis goes wrong.
 """
@@ -476,15 +477,22 @@ def test_flipped_faces_are_reoriented_on_repair(capsys, tmp_path, clean_wolf):
     np.testing.assert_allclose([a for _, a in repaired], [a for _, a in clean], rtol=1e-5)
 
 
-def test_non_manifold_edge_is_an_error_even_with_repair(capsys, tmp_path, clean_wolf):
-    mesh, _ = clean_wolf
+def test_non_manifold_edge_is_an_error_without_repair_and_split_off_with_it(capsys, tmp_path, clean_wolf):
+    mesh, clean = clean_wolf
     a, b, _ = mesh.faces[0]
     apex = mesh.vertices[[a, b]].mean(axis=0) + [0.0, 0.0, 5.0]
     path = tmp_path / "fin.off"
     faces = np.vstack([mesh.faces, [[a, b, mesh.n_vertices]]])  # a fin: edge a-b now has three faces
     save_mesh(Mesh(np.vstack([mesh.vertices, apex]), faces), path)
-    for flags in ([], ["--repair"]):
-        assert_one_error_line(*run(capsys, "features", path, "--no-cache", *flags), path, "non-manifold edges")
+    code, out, err = run(capsys, "features", path, "--no-cache")
+    assert_one_error_line(code, out, err, path, "non-manifold edges")
+    assert "--repair" in err
+    code, out, err = run(capsys, "features", path, "--repair", "--no-cache")
+    assert code == 0
+    assert notes(err) == [f"darcyan: note: {path}: split 1 non-manifold edges (more than two faces on one "
+                          f"edge) into pairs of faces"]
+    assert f"darcyan: warning: {path}: 2 connected components" in err  # the fin, left out
+    assert features_rows(out) == clean
 
 
 @pytest.mark.parametrize("where", ["after", "before"])

@@ -56,7 +56,7 @@ def _add_config_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--config", metavar="JSON",
                        help="a JSON file of settings to change (method parameters by name, sections such as "
                             "{\"mirror\": {\"samples\": 400}} in part; see darcyan.DarcyanConfig); options given beside it still apply")
-    parser.add_argument("--repair", action="store_true", help="drop duplicate/degenerate faces and unreferenced vertices instead of refusing them")
+    parser.add_argument("--repair", action="store_true", help="weld coincident boundary vertices (triangle soups), drop duplicate/degenerate faces and unreferenced vertices, split non-manifold edges and reorient faces instead of refusing them")
     parser.add_argument("--no-cache", action="store_true", help="do not read or write the per-shape cache ($DARCYAN_CACHE)")
     parser.add_argument("--threads", type=int, default=1, metavar="N",
                         help="BLAS/OpenMP threads (default %(default)s: the work is not BLAS-bound, and more threads "

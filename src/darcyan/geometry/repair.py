@@ -1,5 +1,23 @@
-"""Checks and repair of a mesh before analysis: strict checks, repairable defects, largest
-component, consistent and outward orientation."""
+"""Checks and repair of a mesh before analysis.
+
+:func:`prepare_mesh` takes a mesh as read from a file to one the solvers accept (potpourri3d's
+fast marching and geodesic tracing build a manifold, consistently oriented halfedge mesh and
+refuse anything else), in this order:
+
+1. strict checks (:func:`check_mesh`): size, finite coordinates, face indices in range;
+2. coincident vertices on the boundary: welded under ``repair`` (:func:`weld_vertices`); a
+   triangle soup (faces that share no vertex) is refused without it, with a message saying so;
+3. repairable defects (:func:`inspect_mesh`): duplicate and degenerate faces, unreferenced
+   vertices, non-manifold edges (more than two faces on one edge). Without ``repair`` they are one
+   error naming the option; with it faces and vertices are dropped and edges split apart;
+4. non-manifold vertices (fans of faces meeting only at one vertex, "bow ties") are always split,
+   one copy of the vertex per fan (:func:`split_nonmanifold`), with a :class:`MeshWarning`;
+5. the largest connected component, with a warning about what was left out;
+6. orientation: made consistent under ``repair``, then outward.
+
+Every vertex keeps ``input_index``, its index in the input, through all of them: a welded vertex
+takes the smallest index of its group, every copy of a split vertex the index of the original.
+"""
 
 from __future__ import annotations
 
@@ -9,13 +27,22 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import MeshError
-from .mesh import Mesh, MeshWarning, _edge_counts
+from .mesh import Mesh, MeshWarning, _edge_counts, boundary_vertices
 
 MIN_VERTICES = 4
 MIN_FACES = 2
 # A face is degenerate when its area is below this fraction of the mean face area.
 DEGENERATE_AREA_FRACTION = 1e-12
-
+# Under repair, vertices closer than this fraction of the mean edge length are one point: copies
+# of a vertex written by one program agree to the last digits, real edges are ~1e6 times longer.
+WELD_TOLERANCE = 1e-6
+# A mesh is taken for a triangle soup when more than this fraction of its faces are components of
+# a single face: its largest component would be one triangle.
+SOUP_FRACTION = 0.5
+# Rounds of dropping faces on edges that splitting left non-manifold (a fan running around a
+# vertex that passes one edge twice): a last resort, never needed by tosca-5k and faust-5k
+# decimated to 10%..1% of their vertices nor by thousands of randomly pinched spheres and tori.
+TANGLE_ROUNDS = 3
 
 
 @dataclass
@@ -25,7 +52,7 @@ class MeshReport:
     duplicate_faces: np.ndarray  # indices of faces repeating an earlier face
     degenerate_faces: np.ndarray  # repeated corner or (near) zero area
     unreferenced_vertices: np.ndarray
-    nonmanifold_edges: int
+    nonmanifold_edges: int  # edges of more than two faces, not counting duplicate or degenerate ones
 
 
 def check_mesh(mesh: Mesh) -> None:
@@ -72,47 +99,269 @@ def inspect_mesh(mesh: Mesh) -> MeshReport:
 
 
 def prepare_mesh(mesh: Mesh, repair: bool = False) -> tuple[Mesh, list[str]]:
-    """Make ``mesh`` ready for analysis: checked, optionally repaired, largest component only.
+    """Make ``mesh`` ready for analysis (see the module docstring for the steps).
 
-    Without ``repair``, duplicate faces, degenerate faces, unreferenced vertices and
-    inconsistently oriented faces are errors that name the fix; with it the first three are
-    dropped, the faces reoriented, and each change described in the returned list. Non-manifold
-    edges and vertices are always an error (no safe automatic fix). With several connected components the
-    largest (by area) is kept and a :class:`MeshWarning` says how much was left out.
+    Without ``repair``, a triangle soup, duplicate faces, degenerate faces, unreferenced vertices,
+    non-manifold edges and inconsistently oriented faces are errors that name the fix; with it
+    coincident boundary vertices are welded, the faces and vertices dropped, the edges split and
+    the faces reoriented, and each change described in the returned list. Non-manifold vertices are split
+    either way, and with several connected components the largest (by area) is kept, each with a
+    :class:`MeshWarning`.
 
     Returns:
         The prepared mesh (``input_index`` maps back to ``mesh``'s input numbering) and a list of
         human-readable changes.
     """
     check_mesh(mesh)
-    report = inspect_mesh(mesh)
     changes: list[str] = []
-    problems = []
+    if repair:
+        before = mesh.n_vertices
+        mesh = weld_vertices(mesh)
+        if mesh.n_vertices < before:
+            changes.append(f"welded {before - mesh.n_vertices} coincident vertices into others "
+                           f"({mesh.n_vertices} vertices left)")
+    _refuse_soup(mesh, repair)
+
+    report = inspect_mesh(mesh)
+    droppable = []
     if len(report.duplicate_faces):
-        problems.append(f"{len(report.duplicate_faces)} duplicate faces")
+        droppable.append(f"{len(report.duplicate_faces)} duplicate faces")
     if len(report.degenerate_faces):
-        problems.append(f"{len(report.degenerate_faces)} degenerate (zero-area) faces")
+        droppable.append(f"{len(report.degenerate_faces)} degenerate (zero-area) faces")
     if len(report.unreferenced_vertices):
-        problems.append(f"{len(report.unreferenced_vertices)} unreferenced vertices")
-    if problems and not repair:
-        raise MeshError(mesh.name, ", ".join(problems) + " (use --repair / repair=True to drop them)")
-    if report.nonmanifold_edges:
-        raise MeshError(mesh.name, f"{report.nonmanifold_edges} non-manifold edges (shared by more "
-                                   f"than two faces); fix them in a mesh editor")
-    faces = mesh.faces
-    if problems:
-        keep = np.ones(len(faces), bool)
+        droppable.append(f"{len(report.unreferenced_vertices)} unreferenced vertices")
+    edges = f"{report.nonmanifold_edges} non-manifold edges (more than two faces on one edge)"
+    if not repair and (droppable or report.nonmanifold_edges):
+        problems = droppable + [edges] * bool(report.nonmanifold_edges)
+        fix = "drop or split them" if report.nonmanifold_edges else "drop them"
+        raise MeshError(mesh.name, ", ".join(problems) + f" (use --repair / repair=True to {fix})")
+    if droppable:
+        keep = np.ones(mesh.n_faces, bool)
         keep[report.duplicate_faces] = False
         keep[report.degenerate_faces] = False
-        faces = faces[keep]
-        changes = [f"dropped {p}" for p in problems]
-    mesh = _largest_component(Mesh(mesh.vertices, faces, mesh.name, mesh.input_index))
-    _check_vertex_manifold(mesh)
-    if repair and not _consistently_oriented(mesh.faces, mesh.n_vertices):
+        mesh = Mesh(mesh.vertices, mesh.faces[keep], mesh.name, mesh.input_index)
+        changes += [f"dropped {p}" for p in droppable]  # unreferenced vertices: by the next step
+
+    mesh, dropped = split_nonmanifold(mesh)
+    if report.nonmanifold_edges:
+        changes.append(f"split {edges} into pairs of faces"
+                       + (f", dropping {dropped} faces they could not be split from" if dropped else ""))
+    mesh = _largest_component(mesh)
+
+    if not _consistently_oriented(mesh.faces, mesh.n_vertices):
+        if not repair:
+            raise MeshError(mesh.name, "faces are not consistently oriented (an edge is used twice in "
+                                       "the same direction); use --repair / repair=True to reorient them")
         mesh, flipped = _orient_consistently(mesh)
+        if not _consistently_oriented(mesh.faces, mesh.n_vertices):
+            raise MeshError(mesh.name, "the surface is not orientable (a Moebius strip?): no choice of "
+                                       "face orientations agrees along every edge")
         changes.append(f"reoriented {flipped} faces to agree with their neighbours")
-    mesh = _orient_outward(mesh)
-    return mesh, changes
+    return _orient_outward(mesh), changes
+
+
+# ----------------------------------------------------------------------------------------------
+# Coincident vertices and triangle soups
+
+
+def weld_vertices(mesh: Mesh, tolerance: float = WELD_TOLERANCE) -> Mesh:
+    """``mesh`` with boundary vertices closer than ``tolerance`` times the mean edge length made one.
+
+    Only vertices on the boundary (on an edge of one face) are welded: that is where copies of
+    one vertex leave a seam open, or every edge of a triangle soup. Two coincident vertices inside
+    a closed surface are two points of it that touch (three faust-5k meshes have such a pair), and
+    welding them would pinch it. Each group of coincident vertices (chained: within tolerance of
+    one another) becomes its member of smallest ``input_index``, which keeps its position and
+    index; the others are dropped and their faces renumbered (faces this collapses are left to
+    :func:`inspect_mesh`). Returns ``mesh`` itself when nothing is welded.
+    """
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    v, f, n = mesh.vertices, mesh.faces, mesh.n_vertices
+    mean_edge = float(np.linalg.norm(v[f] - v[f[:, [1, 2, 0]]], axis=2).mean())
+    open_ = np.flatnonzero(boundary_vertices(mesh))
+    pairs = open_[cKDTree(v[open_]).query_pairs(tolerance * mean_edge, output_type="ndarray")]
+    if not len(pairs):
+        return mesh
+    graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, group = connected_components(graph, directed=False)
+    by_group = np.lexsort((mesh.input_index, group))  # each group's smallest input index first
+    first = np.r_[True, group[by_group][1:] != group[by_group][:-1]]
+    representative = np.empty(group.max() + 1, dtype=np.int64)
+    representative[group[by_group[first]]] = by_group[first]
+    kept = np.sort(by_group[first])  # the survivors, in their original order
+    new_index = np.full(n, -1, dtype=np.int64)
+    new_index[kept] = np.arange(len(kept))
+    faces = new_index[representative[group]][f]
+    return Mesh(v[kept], faces, mesh.name, mesh.input_index[kept])
+
+
+def _refuse_soup(mesh: Mesh, repair: bool) -> None:
+    """Refuse a mesh whose faces mostly share no vertex: keeping its largest component (one
+    triangle) would fail later with a misleading "too small or coarse"."""
+    # A face is a component of its own exactly when no other face uses any of its vertices.
+    uses = np.bincount(mesh.faces.ravel(), minlength=mesh.n_vertices)
+    single = int((uses[mesh.faces] == 1).all(axis=1).sum())
+    if single > SOUP_FRACTION * mesh.n_faces:
+        if repair:  # welded already: the copies of a vertex are not where the others are
+            raise MeshError(mesh.name, f"{single} components of 1 face each even after welding "
+                                       f"coincident vertices: a triangle soup whose copies of a vertex "
+                                       f"differ by more than {WELD_TOLERANCE:g} of the mean edge?")
+        raise MeshError(mesh.name, f"{single} components of 1 face each: a triangle soup? "
+                                   f"--repair welds coincident vertices")
+
+
+# ----------------------------------------------------------------------------------------------
+# Non-manifold edges and vertices
+
+
+def split_nonmanifold(mesh: Mesh) -> tuple[Mesh, int]:
+    """``mesh`` made manifold by splitting rather than dropping.
+
+    Around an edge of more than two faces, the faces are glued in pairs that close a fan around
+    one of its end points (see :func:`_glued_half_edges`); a face left without a partner gets an
+    edge of its own. Then every vertex gets one copy per fan of faces around it (the first fan
+    keeps the vertex, copies are appended; each copy's ``input_index`` is the original's), with
+    a :class:`MeshWarning` for the vertices that were not on a non-manifold edge (those are the
+    input's bow ties; the others are the edges' repair). Where a fan passes one edge twice the
+    split cannot separate the edge: the faces beyond its first two are dropped and the split
+    repeated.
+
+    Returns the mesh and how many faces were dropped.
+    """
+    keys, counts = _edge_counts(mesh.faces, mesh.n_vertices)
+    on_edge = np.zeros(mesh.n_vertices, bool)
+    tangled = keys[counts > 2]
+    on_edge[tangled // mesh.n_vertices] = on_edge[tangled % mesh.n_vertices] = True
+    split_mesh, split = _split_fans(mesh)
+    bow_ties = split[~on_edge[split]]
+    if len(bow_ties):
+        warnings.warn(f"{mesh.name}: split {len(bow_ties)} non-manifold vertices (fans of faces meeting "
+                      f"only at a vertex; first: input vertex {int(mesh.input_index[bow_ties[0]])}) "
+                      f"into one copy per fan", MeshWarning, stacklevel=3)
+    dropped, rounds = 0, 0
+    while (beyond := _faces_beyond_two(split_mesh.faces, split_mesh.n_vertices)).any():
+        if rounds == TANGLE_ROUNDS:
+            raise MeshError(mesh.name, f"{int(beyond.sum())} faces remain on non-manifold edges after "
+                                       f"splitting; fix them in a mesh editor")
+        kept = Mesh(split_mesh.vertices, split_mesh.faces[~beyond], mesh.name, split_mesh.input_index)
+        split_mesh, _ = _split_fans(kept)
+        dropped, rounds = dropped + int(beyond.sum()), rounds + 1
+    return split_mesh, dropped
+
+
+def nonmanifold_vertices(mesh: Mesh) -> np.ndarray:
+    """Vertices whose faces form more than one fan (faces glued as :func:`_glued_half_edges` says)."""
+    fans = np.unique(mesh.faces.ravel() * (3 * mesh.n_faces) + _corner_fans(mesh))  # (vertex, fan) pairs
+    return np.flatnonzero(np.bincount(fans // (3 * mesh.n_faces), minlength=mesh.n_vertices) > 1)
+
+
+def _split_fans(mesh: Mesh) -> tuple[Mesh, np.ndarray]:
+    """One vertex per (vertex, fan): the first fan of each vertex keeps it, the others get copies
+    appended after the existing vertices. Returns the mesh and the vertices that were split."""
+    n_corners = 3 * mesh.n_faces
+    pair = mesh.faces.ravel() * n_corners + _corner_fans(mesh)
+    pairs, corner_pair = np.unique(pair, return_inverse=True)
+    vertex = pairs // n_corners
+    copy = np.r_[False, vertex[1:] == vertex[:-1]]  # a second, third... fan of its vertex
+    if not copy.any():
+        return mesh, np.zeros(0, dtype=np.int64)
+    new_vertex = vertex.copy()
+    new_vertex[copy] = mesh.n_vertices + np.arange(int(copy.sum()))
+    faces = new_vertex[corner_pair.ravel()].reshape(-1, 3)
+    copied = vertex[copy]
+    split = Mesh(np.vstack([mesh.vertices, mesh.vertices[copied]]), faces, mesh.name,
+                 np.r_[mesh.input_index, mesh.input_index[copied]])
+    return split, np.unique(copied)
+
+
+def _corner_fans(mesh: Mesh) -> np.ndarray:
+    """``(3m,)`` for each face corner (corner ``3t + i`` is vertex ``faces[t, i]``) a label shared by
+    the corners of one fan: the faces around a vertex reached from one another across glued edges
+    (:func:`_glued_half_edges`)."""
+    # Half-edge h = 3t + i runs from corner h (vertex f[t, i]) to corner nxt[h] of the same face.
+    start = mesh.faces.ravel()
+    nxt = np.arange(3 * mesh.n_faces).reshape(-1, 3)[:, [1, 2, 0]].ravel()
+    return _fans(start, nxt, *_glued_half_edges(mesh.n_vertices, start, nxt))
+
+
+def _fans(start: np.ndarray, nxt: np.ndarray, h1: np.ndarray, h2: np.ndarray) -> np.ndarray:
+    """Fan labels of the corners when the half-edges ``h1[k]`` and ``h2[k]`` are glued."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    # Link the corners of the two faces at each end point of their shared edge.
+    opposite = start[h1] == start[nxt[h2]]  # the faces run the edge in opposite directions (usual case)
+    rows = np.concatenate([h1, nxt[h1]])
+    cols = np.concatenate([np.where(opposite, nxt[h2], h2), np.where(opposite, h2, nxt[h2])])
+    n_corners = len(start)
+    graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n_corners, n_corners))
+    return connected_components(graph, directed=False)[1]
+
+
+def _glued_half_edges(n_vertices: int, start: np.ndarray, nxt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs ``(h1, h2)`` of half-edges glued into one edge of the surface.
+
+    The two half-edges of an edge of two faces are glued. Around an edge of more than two faces,
+    two faces are glued when they are the two ends of one fan around an end point of the edge:
+    gluing them closes the fan, so that sheets pinched together along the edge (what decimation
+    leaves) come apart at the split, each whole, and a fin hung on the edge is left alone. Gluing
+    closes further fans, so this repeats until no pair is found (along a chain of such edges, one
+    edge further each round); faces left without a partner get an edge of their own.
+    """
+    end = start[nxt]
+    lo = np.minimum(start, end)
+    key = lo * n_vertices + np.maximum(start, end)
+    h1, h2, count = _twins(key)
+    pending = np.flatnonzero(count > 2)  # half-edges of non-manifold edges
+    edge = np.unique(key[pending], return_inverse=True)[1].ravel()  # those edges numbered 0, 1, ...
+    while len(pending):
+        fans = _fans(start, nxt, h1, h2)
+        forward = start[pending] == lo[pending]
+        at_lo = np.where(forward, pending, nxt[pending])  # each face's corner at the edge's lo end
+        at_hi = np.where(forward, nxt[pending], pending)  # and at its hi end
+        left = np.ones(len(pending), bool)
+        for corner in (at_lo, at_hi):
+            open_ = np.flatnonzero(left)
+            i, j, _ = _twins(edge[open_] * len(start) + fans[corner[open_]])
+            h1, h2 = np.r_[h1, pending[open_[i]]], np.r_[h2, pending[open_[j]]]
+            left[open_[i]] = left[open_[j]] = False
+        if left.all():
+            break
+        pending, edge = pending[left], edge[left]
+    return h1, h2
+
+
+def _twins(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The index pairs ``(i, j)`` of the values that occur exactly twice in ``keys``, and for each
+    value of ``keys`` how often it occurs."""
+    order = np.argsort(keys, kind="stable")
+    ranked = keys[order]
+    first = np.r_[True, ranked[1:] != ranked[:-1]]
+    run = np.cumsum(first) - 1
+    size = np.bincount(run)[run]
+    pair = np.flatnonzero(first & (size == 2))
+    count = np.empty(len(keys), dtype=np.int64)
+    count[order] = size
+    return order[pair], order[pair + 1], count
+
+
+def _faces_beyond_two(faces: np.ndarray, n_vertices: int) -> np.ndarray:
+    """``(m,) bool``: faces on an edge of more than two faces, other than its first two faces."""
+    a, b = faces.ravel(), faces[:, [1, 2, 0]].ravel()
+    key = np.minimum(a, b) * n_vertices + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")  # stable: faces of one edge by face index
+    start = np.r_[True, key[order][1:] != key[order][:-1]]
+    rank = np.arange(len(key)) - np.maximum.accumulate(np.where(start, np.arange(len(key)), 0))
+    beyond = np.zeros(len(key), bool)
+    beyond[order] = rank >= 2
+    return beyond.reshape(-1, 3).any(axis=1)
+
+
+# ----------------------------------------------------------------------------------------------
+# Components and orientation
 
 
 def _largest_component(mesh: Mesh) -> Mesh:
@@ -149,39 +398,6 @@ def _submesh(mesh: Mesh, keep_faces: np.ndarray) -> Mesh:
     return Mesh(mesh.vertices[used], remap[faces], mesh.name, mesh.input_index[used])
 
 
-def _check_vertex_manifold(mesh: Mesh) -> None:
-    """Refuse a vertex whose faces form more than one fan (a 'bow tie'): the solvers cannot."""
-    bad = nonmanifold_vertices(mesh)
-    if len(bad):
-        raise MeshError(mesh.name, f"{len(bad)} non-manifold vertices (faces meeting only at a "
-                                   f"vertex, first: {int(mesh.input_index[bad[0]])})")
-
-
-def nonmanifold_vertices(mesh: Mesh) -> np.ndarray:
-    """Vertices whose faces form more than one fan (edge-manifold input assumed)."""
-    f = mesh.faces
-    n_faces = len(f)
-    # Half-edge h = 3t + i runs from corner h (vertex f[t, i]) to corner nxt[h] of the same face.
-    start = f.ravel()
-    nxt = np.arange(3 * n_faces).reshape(-1, 3)[:, [1, 2, 0]].ravel()
-    end = start[nxt]
-    key = np.minimum(start, end) * mesh.n_vertices + np.maximum(start, end)
-    order = np.argsort(key, kind="stable")
-    same = key[order][1:] == key[order][:-1]
-    h1, h2 = order[:-1][same], order[1:][same]  # the two half-edges of each interior edge
-    # Link the corners of the two faces at each end point of their shared edge.
-    opposite = start[h1] == end[h2]  # the faces run the edge in opposite directions (usual case)
-    rows = np.concatenate([h1, nxt[h1]])
-    cols = np.concatenate([np.where(opposite, nxt[h2], h2), np.where(opposite, h2, nxt[h2])])
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-
-    graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(3 * n_faces, 3 * n_faces))
-    _, fan = connected_components(graph, directed=False)
-    fans = np.unique(f.ravel() * (3 * n_faces) + fan)  # distinct (vertex, fan) pairs
-    return np.flatnonzero(np.bincount(fans // (3 * n_faces), minlength=mesh.n_vertices) > 1)
-
-
 def _consistently_oriented(faces: np.ndarray, n_vertices: int) -> bool:
     """True when no directed edge is used by two faces (neighbours agree on orientation)."""
     directed = faces.ravel() * n_vertices + faces[:, [1, 2, 0]].ravel()
@@ -203,18 +419,12 @@ def _orient_consistently(mesh: Mesh) -> tuple[Mesh, int]:
 
 
 def _orient_outward(mesh: Mesh) -> Mesh:
-    """Flip all faces if a closed mesh encloses negative volume (inward-facing normals)."""
+    """Flip all faces if a closed (consistently oriented) mesh encloses negative volume."""
     f = mesh.faces
     _, counts = _edge_counts(f, mesh.n_vertices)
-    if not _consistently_oriented(f, mesh.n_vertices):
-        raise MeshError(mesh.name, "faces are not consistently oriented (an edge is used twice in "
-                                   "the same direction); use --repair / repair=True to reorient them")
-    closed = bool((counts == 2).all())
-    if closed:
+    if (counts == 2).all():
         v = mesh.vertices
         volume = np.einsum("ij,ij->i", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]])).sum() / 6.0
         if volume < 0:
             return Mesh(mesh.vertices, f[:, ::-1].copy(), mesh.name, mesh.input_index)
     return mesh
-
-

@@ -1,0 +1,199 @@
+"""The meshes people actually have: bow ties, non-manifold edges, triangle soups, decimated meshes.
+
+* Non-manifold vertices (fans of faces meeting only at a vertex) are split by default, one copy
+  per fan, with a warning; every copy maps back to the input vertex.
+* Non-manifold edges and duplicate faces are an error naming ``--repair`` without it, and split
+  apart (faces glued in pairs that close a fan) with it.
+* A triangle soup is refused with a message saying so without ``--repair``, and welded back to the
+  original mesh with it.
+* Meshes decimated by fast_simplification to 10% and 5% of their vertices (duplicate faces,
+  sheets pinched along an edge) prepare and describe with ``repair=True``.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from darcyan import MeshError, MeshWarning, analyze_mesh
+from darcyan.cli import main
+from darcyan.geometry import synthetic
+from darcyan.geometry.mesh import Mesh, _edge_counts
+from darcyan.geometry.repair import nonmanifold_vertices, prepare_mesh, split_nonmanifold
+from darcyan.io.mesh_files import load_mesh, save_mesh
+
+
+def tosca_5k(tosca, name: str) -> Mesh:
+    return load_mesh(tosca / "tosca-5k" / f"{name}.off")
+
+
+def soup(mesh: Mesh) -> Mesh:
+    """Every face with its own three vertices (what STL files and some exporters write)."""
+    return Mesh(mesh.vertices[mesh.faces].reshape(-1, 3), np.arange(3 * mesh.n_faces).reshape(-1, 3), "soup")
+
+
+def cone_fan(apex: np.ndarray, rim_radius: float, height: float, rim_first: int, sides: int = 6):
+    """An open cone around ``apex`` (vertex 0): rim vertices and faces numbered from ``rim_first``."""
+    angles = np.linspace(0, 2 * np.pi, sides, endpoint=False)
+    rim = apex + np.c_[rim_radius * np.cos(angles), rim_radius * np.sin(angles), np.full(sides, height)]
+    ring = rim_first + np.arange(sides)
+    faces = np.c_[np.zeros(sides, int), ring, np.roll(ring, -1)]
+    return rim, faces if height > 0 else faces[:, [0, 2, 1]]
+
+
+def test_bow_tie_of_two_fans_is_split_and_each_copy_maps_back():
+    apex = np.zeros(3)
+    rim_up, faces_up = cone_fan(apex, 1.0, 1.0, 1)
+    rim_down, faces_down = cone_fan(apex, 2.0, -1.0, 7)  # the larger fan: the one kept
+    mesh = Mesh(np.vstack([apex, rim_up, rim_down]), np.vstack([faces_up, faces_down]), "bow tie")
+    np.testing.assert_array_equal(nonmanifold_vertices(mesh), [0])
+
+    with pytest.warns(MeshWarning, match="split 1 non-manifold vertices .*first: input vertex 0"):
+        split, dropped = split_nonmanifold(mesh)
+    assert dropped == 0 and split.n_vertices == mesh.n_vertices + 1
+    np.testing.assert_array_equal(split.input_index, np.r_[np.arange(13), 0])  # the copy is vertex 0
+    apexes = {int(split.faces[t][0]) for t in range(split.n_faces)}
+    assert apexes == {0, 13} and len(nonmanifold_vertices(split)) == 0
+
+    with pytest.warns(MeshWarning) as caught:
+        prepared, changes = prepare_mesh(mesh)
+    messages = [str(w.message) for w in caught]
+    assert any("split 1 non-manifold vertices" in m for m in messages)
+    assert any("2 connected components" in m for m in messages)
+    assert changes == []
+    np.testing.assert_array_equal(np.sort(prepared.input_index), np.r_[0, np.arange(7, 13)])
+    np.testing.assert_array_equal(prepared.vertices, mesh.vertices[prepared.input_index])
+
+
+def test_two_triangles_sharing_a_corner_are_split():
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -2, 0]], float)
+    with pytest.warns(MeshWarning, match="split 1 non-manifold vertices"):
+        split, _ = split_nonmanifold(Mesh(vertices, [[0, 1, 2], [0, 3, 4]]))
+    np.testing.assert_array_equal(split.faces, [[0, 1, 2], [5, 3, 4]])
+    np.testing.assert_array_equal(split.input_index, [0, 1, 2, 3, 4, 0])
+
+
+def test_pinched_real_mesh_prepares_with_a_warning_and_describes(tosca):
+    mesh = tosca_5k(tosca, "wolf0")
+    # Glue the two vertices farthest apart along x (snout and tail) into one: vertex `kept` then
+    # has two fans of faces, and `gone` leaves the file.
+    kept, gone = int(np.argmax(mesh.vertices[:, 0])), int(np.argmin(mesh.vertices[:, 0]))
+    faces = np.where(mesh.faces == gone, kept, mesh.faces)
+    pinched = Mesh(np.delete(mesh.vertices, gone, axis=0), faces - (faces > gone), "pinched")
+    kept -= kept > gone
+    np.testing.assert_array_equal(nonmanifold_vertices(pinched), [kept])
+
+    with pytest.warns(MeshWarning, match=f"split 1 non-manifold vertices .*first: input vertex {kept}\\)"):
+        prepared, changes = prepare_mesh(pinched)
+    assert changes == [] and prepared.n_vertices == pinched.n_vertices + 1
+    assert (prepared.input_index == kept).sum() == 2
+    np.testing.assert_array_equal(prepared.vertices, pinched.vertices[prepared.input_index])
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshWarning)
+        analysis = analyze_mesh(pinched)
+    assert len(analysis.feature_vertices) > 0
+    assert ((0 <= analysis.feature_vertices) & (analysis.feature_vertices < pinched.n_vertices)).all()
+
+
+def test_soup_is_refused_without_repair_and_welded_back_with_it(tosca):
+    mesh = tosca_5k(tosca, "wolf0")
+    soupy = soup(mesh)
+    with pytest.raises(MeshError, match=f"{mesh.n_faces} components of 1 face each: a triangle soup\\? "
+                                        f"--repair welds coincident vertices"):
+        prepare_mesh(soupy)
+
+    welded, changes = prepare_mesh(soupy, repair=True)
+    assert welded.n_vertices == mesh.n_vertices
+    assert changes == [f"welded {soupy.n_vertices - mesh.n_vertices} coincident vertices into others "
+                       f"({mesh.n_vertices} vertices left)"]
+    # Each welded vertex is its first copy in the soup: the smallest input index of its group.
+    _, first_copy = np.unique(mesh.faces.ravel(), return_index=True)
+    np.testing.assert_array_equal(np.sort(welded.input_index), np.sort(first_copy))
+
+    original = analyze_mesh(mesh)
+    analysis = analyze_mesh(soupy, repair=True)
+    assert analysis.changes == tuple(changes)
+    assert ((0 <= analysis.feature_vertices) & (analysis.feature_vertices < soupy.n_vertices)).all()
+    np.testing.assert_array_equal(soupy.vertices[analysis.feature_vertices],
+                                  mesh.vertices[original.feature_vertices])
+    np.testing.assert_allclose(analysis.feature_agd, original.feature_agd, rtol=1e-6)
+
+
+def test_soup_is_one_error_line_on_the_command_line(capsys, tmp_path):
+    path = tmp_path / "soup.off"
+    save_mesh(soup(synthetic.icosphere(2)), path)
+    assert main(["features", str(path), "--no-cache"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == (f"darcyan: error: {path}: 320 components of 1 face each: a triangle soup? "
+                                 f"--repair welds coincident vertices\n")
+
+
+def test_fin_on_an_edge_needs_repair_and_is_split_off_with_it():
+    sphere = synthetic.icosphere(2)
+    a, b, _ = sphere.faces[0]
+    apex = sphere.vertices[[a, b]].mean(axis=0) * 1.5
+    fin = Mesh(np.vstack([sphere.vertices, apex]), np.vstack([sphere.faces, [[a, b, sphere.n_vertices]]]), "fin")
+    with pytest.raises(MeshError, match=r"^fin: 1 non-manifold edges \(more than two faces on one edge\) "
+                                        r"\(use --repair / repair=True to drop or split them\)$"):
+        prepare_mesh(fin)
+    with pytest.warns(MeshWarning, match="2 connected components; using the largest, leaving out 1 components with 1 faces"):
+        prepared, changes = prepare_mesh(fin, repair=True)
+    assert changes == ["split 1 non-manifold edges (more than two faces on one edge) into pairs of faces"]
+    np.testing.assert_array_equal(prepared.input_index, np.arange(sphere.n_vertices))
+    np.testing.assert_array_equal(prepared.faces, sphere.faces)
+
+
+def test_tetrahedra_sharing_an_edge_come_apart_whole():
+    small = np.array([[0, 0, 0], [0, 0, 1], [1, 0, 0.5], [0.5, 1, 0.5]])
+    large = np.array([[-3, 0, 0.5], [-1.5, -3, 0.5]])  # with vertices 0 and 1: a larger tetrahedron
+    faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3],  # outward
+                      [0, 4, 1], [1, 4, 5], [0, 1, 5], [0, 5, 4]])
+    mesh = Mesh(np.vstack([small, large]), faces, "two tetrahedra")
+    keys, counts = _edge_counts(faces, mesh.n_vertices)
+    assert counts.max() == 4  # edge 0-1 carries all four faces of the two
+    with pytest.raises(MeshError, match="--repair"):
+        prepare_mesh(mesh)
+    with pytest.warns(MeshWarning, match="2 connected components; using the largest, leaving out 1 components with 4 faces"):
+        prepared, changes = prepare_mesh(mesh, repair=True)
+    assert changes == ["split 1 non-manifold edges (more than two faces on one edge) into pairs of faces"]
+    assert prepared.n_faces == 4  # no face dropped: the larger tetrahedron, whole
+    np.testing.assert_array_equal(np.sort(prepared.input_index), [0, 1, 4, 5])
+
+
+def test_a_moebius_strip_is_one_clear_error_even_with_repair():
+    n = 40
+    u = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    centre = np.c_[np.cos(u), np.sin(u), np.zeros(n)]
+    across = np.c_[np.cos(u / 2) * np.cos(u), np.cos(u / 2) * np.sin(u), np.sin(u / 2)] * 0.3
+    vertices = np.vstack([centre - across, centre + across])  # vertex i on one edge, n + i on the other
+    i = np.arange(n)
+    j = (i + 1) % n
+    last = i == n - 1  # the strip closes with a half twist: the sides swap
+    low_j, high_j = np.where(last, n + j, j), np.where(last, j, n + j)
+    faces = np.vstack([np.c_[i, low_j, n + i], np.c_[n + i, low_j, high_j]])
+    for repair in (False, True):
+        with pytest.raises(MeshError, match="not consistently oriented" if not repair else "not orientable"):
+            prepare_mesh(Mesh(vertices, faces, "moebius"), repair=repair)
+
+
+@pytest.mark.parametrize("reduction", [0.9, 0.95])
+def test_decimated_mesh_prepares_and_describes_with_repair(tosca, reduction):
+    import fast_simplification
+
+    mesh = tosca_5k(tosca, "michael0")
+    points, faces = fast_simplification.simplify(mesh.vertices, mesh.faces, target_reduction=reduction)
+    decimated = Mesh(points, faces, f"michael0 at {reduction:.0%} reduction")
+    with pytest.raises(MeshError, match="non-manifold edges .*--repair"):
+        prepare_mesh(decimated)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshWarning)  # pieces pinched off by the decimation are left out
+        prepared, changes = prepare_mesh(decimated, repair=True)
+        analysis = analyze_mesh(decimated, repair=True)
+    assert any(c.startswith("split ") and "non-manifold edges" in c for c in changes)
+    assert prepared.n_vertices > 0.9 * decimated.n_vertices
+    assert not len(nonmanifold_vertices(prepared)) and _edge_counts(prepared.faces, prepared.n_vertices)[1].max() == 2
+    assert analysis.changes == tuple(changes) and len(analysis.feature_vertices) >= 4
+    assert ((0 <= analysis.feature_vertices) & (analysis.feature_vertices < decimated.n_vertices)).all()
