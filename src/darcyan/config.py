@@ -60,6 +60,26 @@ class Denoising:
 
 
 @dataclass(frozen=True)
+class Repairing:
+    """What ``--repair`` / ``repair=True`` takes for one point and for no face
+    (:func:`darcyan.geometry.repair.prepare_mesh`).
+
+    Attributes:
+        weld_tolerance: boundary vertices closer than this fraction of the mean edge length are
+            one point: copies of a vertex written by one program agree to the last digits, real
+            edges are ~1e6 times longer.
+        degenerate_area: a face whose area is below this fraction of the mean face area is
+            degenerate (dropped under repair, refused without).
+    """
+
+    weld_tolerance: float = _stage(1e-6, PREPARE)
+    degenerate_area: float = _stage(1e-12, PREPARE)
+
+    def __post_init__(self) -> None:
+        _check(self, ("weld_tolerance", "degenerate_area"), lambda v: _number(v) and 0 <= v < 1, "in [0, 1)")
+
+
+@dataclass(frozen=True)
 class HeatKernel:
     """The heat kernel that moves feature points to the sharpest tip of their extremity, and the
     heat diffusion behind the AGD smoothing and the mirror test's signature.
@@ -194,7 +214,7 @@ def _check(section, names, ok, what: str) -> None:
             raise ConfigError(f"config: {type(section).__name__}.{name} must be {what}, got {value!r}")
 
 
-SECTIONS = {"denoising": Denoising, "heat": HeatKernel, "margins": GeodesicMargins, "consistency": Consistency,
+SECTIONS = {"repairing": Repairing, "denoising": Denoising, "heat": HeatKernel, "margins": GeodesicMargins, "consistency": Consistency,
             "mirror": MirrorTest}
 
 
@@ -251,6 +271,7 @@ class DarcyanConfig:
             cat's ear against its nose); 0 keeps every match.
 
     Sections (typed, each documented in its class), for settings below the method's parameters:
+        repairing: :class:`Repairing`, what ``repair`` welds and drops.
         denoising: :class:`Denoising`, how a crumpled surface is smoothed.
         heat: :class:`HeatKernel`, the heat kernel of the sharpest tips and the heat diffusions.
         margins: :class:`GeodesicMargins`, how far exact geodesics reach around a feature point.
@@ -278,6 +299,7 @@ class DarcyanConfig:
     max_features: int = _stage(0, DESCRIBE)
     matching: str = _stage("consistent", MATCH)
     max_match_distance: float = _stage(1.5, MATCH)
+    repairing: Repairing = _stage(Repairing(), PREPARE)
     denoising: Denoising = _stage(Denoising(), PREPARE)
     heat: HeatKernel = _stage(HeatKernel(), DESCRIBE)
     margins: GeodesicMargins = _stage(GeodesicMargins(), DESCRIBE)

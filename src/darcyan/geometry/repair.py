@@ -26,16 +26,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..config import Repairing
 from ..errors import MeshError
 from .mesh import Mesh, MeshWarning, _edge_counts, boundary_vertices
 
 MIN_VERTICES = 4
 MIN_FACES = 2
-# A face is degenerate when its area is below this fraction of the mean face area.
-DEGENERATE_AREA_FRACTION = 1e-12
-# Under repair, vertices closer than this fraction of the mean edge length are one point: copies
-# of a vertex written by one program agree to the last digits, real edges are ~1e6 times longer.
-WELD_TOLERANCE = 1e-6
 # A mesh is taken for a triangle soup when more than this fraction of its faces are components of
 # a single face: its largest component would be one triangle.
 SOUP_FRACTION = 0.5
@@ -78,8 +74,9 @@ def check_mesh(mesh: Mesh) -> None:
         raise MeshError(mesh.name, f"face index {high} out of range: the mesh has {mesh.n_vertices} vertices")
 
 
-def inspect_mesh(mesh: Mesh) -> MeshReport:
-    """Find the defects :func:`prepare_mesh` can repair or must refuse."""
+def inspect_mesh(mesh: Mesh, degenerate_area: float = Repairing().degenerate_area) -> MeshReport:
+    """Find the defects :func:`prepare_mesh` can repair or must refuse (a face is degenerate
+    below ``degenerate_area`` times the mean face area)."""
     faces = mesh.faces
     sorted_faces = np.sort(faces, axis=1)
     order = np.lexsort(sorted_faces.T[::-1])  # stable: the first of equal faces comes first
@@ -88,7 +85,7 @@ def inspect_mesh(mesh: Mesh) -> MeshReport:
     areas = mesh.face_areas()
     mean_area = areas.mean() if len(areas) else 0.0
     repeated = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])
-    degenerate = np.flatnonzero(repeated | (areas <= DEGENERATE_AREA_FRACTION * mean_area))
+    degenerate = np.flatnonzero(repeated | (areas <= degenerate_area * mean_area))
     used = np.zeros(mesh.n_vertices, bool)
     used[faces.ravel()] = True
     keep = np.ones(len(faces), bool)
@@ -98,7 +95,7 @@ def inspect_mesh(mesh: Mesh) -> MeshReport:
     return MeshReport(duplicate, degenerate, np.flatnonzero(~used), int((counts > 2).sum()))
 
 
-def prepare_mesh(mesh: Mesh, repair: bool = False) -> tuple[Mesh, list[str]]:
+def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairing()) -> tuple[Mesh, list[str]]:
     """Make ``mesh`` ready for analysis (see the module docstring for the steps).
 
     Without ``repair``, a triangle soup, duplicate faces, degenerate faces, unreferenced vertices,
@@ -116,13 +113,13 @@ def prepare_mesh(mesh: Mesh, repair: bool = False) -> tuple[Mesh, list[str]]:
     changes: list[str] = []
     if repair:
         before = mesh.n_vertices
-        mesh = weld_vertices(mesh)
+        mesh = weld_vertices(mesh, settings.weld_tolerance)
         if mesh.n_vertices < before:
             changes.append(f"welded {before - mesh.n_vertices} coincident vertices into others "
                            f"({mesh.n_vertices} vertices left)")
-    _refuse_soup(mesh, repair)
+    _refuse_soup(mesh, repair, settings.weld_tolerance)
 
-    report = inspect_mesh(mesh)
+    report = inspect_mesh(mesh, settings.degenerate_area)
     droppable = []
     if len(report.duplicate_faces):
         droppable.append(f"{len(report.duplicate_faces)} duplicate faces")
@@ -164,7 +161,7 @@ def prepare_mesh(mesh: Mesh, repair: bool = False) -> tuple[Mesh, list[str]]:
 # Coincident vertices and triangle soups
 
 
-def weld_vertices(mesh: Mesh, tolerance: float = WELD_TOLERANCE) -> Mesh:
+def weld_vertices(mesh: Mesh, tolerance: float = Repairing().weld_tolerance) -> Mesh:
     """``mesh`` with boundary vertices closer than ``tolerance`` times the mean edge length made one.
 
     Only vertices on the boundary (on an edge of one face) are welded: that is where copies of
@@ -198,7 +195,7 @@ def weld_vertices(mesh: Mesh, tolerance: float = WELD_TOLERANCE) -> Mesh:
     return Mesh(v[kept], faces, mesh.name, mesh.input_index[kept])
 
 
-def _refuse_soup(mesh: Mesh, repair: bool) -> None:
+def _refuse_soup(mesh: Mesh, repair: bool, tolerance: float) -> None:
     """Refuse a mesh whose faces mostly share no vertex: keeping its largest component (one
     triangle) would fail later with a misleading "too small or coarse"."""
     # A face is a component of its own exactly when no other face uses any of its vertices.
@@ -208,7 +205,7 @@ def _refuse_soup(mesh: Mesh, repair: bool) -> None:
         if repair:  # welded already: the copies of a vertex are not where the others are
             raise MeshError(mesh.name, f"{single} components of 1 face each even after welding "
                                        f"coincident vertices: a triangle soup whose copies of a vertex "
-                                       f"differ by more than {WELD_TOLERANCE:g} of the mean edge?")
+                                       f"differ by more than {tolerance:g} of the mean edge?")
         raise MeshError(mesh.name, f"{single} components of 1 face each: a triangle soup? "
                                    f"--repair welds coincident vertices")
 

@@ -138,7 +138,7 @@ def prepare_shape(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: b
     Warns (:class:`MeshWarning`) about what it leaves out or changes; raises
     :class:`~darcyan.errors.MeshError` for input it cannot use.
     """
-    prepared, changes = prepare_mesh(mesh, repair=repair)
+    prepared, changes = prepare_mesh(mesh, repair, config.repairing)
     prepared, steps, area_ratio = denoise_mesh(prepared, config.denoise_area_ratio, config.denoising)
     if steps:
         warnings.warn(f"{mesh.name}: the surface is crumpled at the scale of its edges (its area is "
