@@ -66,6 +66,7 @@ def test_json_output_by_suffix_or_format(capsys, figures, tmp_path):
     assert code == 0 and [r["target"] for r in json.loads(out)] == [str(figures[1]), str(figures[2])]
 
 
+@pytest.mark.slow
 def test_dense_maps_of_several_targets_go_to_a_folder_with_progress(capsys, figures, tmp_path):
     folder = tmp_path / "maps"
     code, _, err = run(capsys, "match", figures[0], figures[1], figures[2], "--dense", "-o", folder)

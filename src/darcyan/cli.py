@@ -128,8 +128,8 @@ def cmd_match(args: argparse.Namespace) -> int:
         read_truth(args.truth)  # a malformed spec or file fails before any computation
     _picture_dependencies(args)
     say = _progress(args)
-    say(f"describing {1 + len(targets)} shapes" if several else "describing the two shapes")
     descriptions = describe_shapes([args.source, *targets], config, args.repair, cache, args.jobs)
+    say(f"described {len(descriptions)} shapes")  # after: a bad input stays one error line
     for description in descriptions:
         _note_changes(description)
     source_shape = None

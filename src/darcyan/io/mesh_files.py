@@ -346,7 +346,8 @@ def _ply_binary_records(data: bytes, body: int, elements: dict, fmt: str, path: 
                     columns[p].append(take(kind[1], int(take(kind[0], 1)[0])))
         records[name] = columns
     if pos != len(data):
-        raise MeshError(path, f"{len(data) - pos} bytes after the last element the header announces")
+        raise MeshError(path, f"{len(data) - pos} bytes after the last element the header announces: "
+                              f"a count in the header is wrong")
     return records
 
 
