@@ -154,9 +154,68 @@ def _trimesh_read(fmt: str, data: bytes, path: Path, hint: str = "", **options) 
 _OFF_KEYWORDS = ("OFF", "COFF", "NOFF", "CNOFF")
 
 
+# Bytes that str.split() treats as whitespace, and line breaks other than "\n" that
+# str.splitlines() honours: files with the latter take the slow, line-by-line path.
+_ASCII_SPACE = np.zeros(256, bool)
+_ASCII_SPACE[list(b" \t\n\r\x0b\x0c\x1c\x1d\x1e\x1f")] = True
+_ODD_BREAKS = b"\x0b\x0c\x1c\x1d\x1e"
+
+
+def _tokens_per_line(data: bytes) -> np.ndarray | None:
+    """Tokens on each non-empty line of a plain-ASCII text (lines ended by ``\n`` or ``\r\n``), or
+    ``None`` when the text has comments, non-ASCII bytes or unusual line breaks."""
+    if b"#" in data or data.count(b"\r") != data.count(b"\r\n"):
+        return None
+    b = np.frombuffer(data, np.uint8)
+    if b.size == 0 or (b >= 128).any() or any(c in data for c in _ODD_BREAKS):
+        return None
+    space = _ASCII_SPACE[b]
+    starts = ~space
+    starts[1:] &= space[:-1]
+    line_of = np.cumsum(b == ord("\n"))
+    counts = np.bincount(line_of[starts], minlength=int(line_of[-1]) + 1)
+    return counts[counts > 0]
+
+
+def _read_off_fast(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
+    """The common case, vectorized: plain OFF, one vertex ``x y z`` and one triangle ``3 i j k``
+    per line. ``None`` when the file is anything else (then the line-by-line parser runs and
+    names the offending line)."""
+    per_line = _tokens_per_line(data)
+    if per_line is None or len(per_line) < 2:
+        return None
+    tokens = data.decode("ascii").split()
+    if tokens[0].upper() not in _OFF_KEYWORDS:
+        return None
+    head = 1 if per_line[0] > 1 else 2  # counts on the OFF line or on the next one
+    count_at = 1
+    try:
+        n_vertices, n_faces = int(tokens[count_at]), int(tokens[count_at + 1])
+    except (ValueError, IndexError):
+        return None
+    header_tokens = int(per_line[:head].sum())
+    body = per_line[head:]
+    if n_vertices < 0 or n_faces <= 0 or len(body) != n_vertices + n_faces:
+        return None
+    if (body[:n_vertices] != 3).any() or (body[n_vertices:] != 4).any():
+        return None
+    split = header_tokens + 3 * n_vertices
+    try:
+        vertices = np.array(tokens[header_tokens:split], dtype=np.float64).reshape(-1, 3)
+        faces = np.array(tokens[split:], dtype=np.int64).reshape(-1, 4)
+    except (ValueError, OverflowError):
+        return None
+    if (faces[:, 0] != 3).any():
+        return None
+    return vertices, faces[:, 1:].copy()
+
+
 def _read_off(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     """``OFF`` (or COFF, NOFF, CNOFF), the counts ``vertices faces [edges]`` (on that line or the
     next), then exactly that many vertex lines ``x y z [...]`` and face lines ``k i1 .. ik [...]``."""
+    fast = _read_off_fast(data)  # 3.5x faster on the 52k TOSCA files (0.47 -> 0.13 s, speed.py)
+    if fast is not None:
+        return fast
     rows = _data_lines(_decode_text(data, path))
     if not rows:
         raise MeshError(path, "empty file")
