@@ -6,6 +6,7 @@ Usage (from the repository root; needs the data at ../shared/data or $DARCYAN_DA
     python benchmarks/speed.py                      # everything (about 10 minutes on 2 cores)
     python benchmarks/speed.py --sizes 5k --no-scaling --no-profile      # a quick look
     python benchmarks/speed.py --json speed.json    # also keep the raw measurements
+    python benchmarks/speed.py --threads-study --repeat 3   # threads, idle and beside a busy neighbour
 
 What is measured, and how:
 
@@ -444,6 +445,50 @@ def scaling_table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+# A neighbour that keeps one core busy (pure Python: it holds no BLAS pool of its own).
+BUSY_NEIGHBOUR = "import time\nend = time.time() + 3600\nwhile time.time() < end: pass\n"
+THREAD_SETTINGS = {
+    "default": ([], {}),
+    "OMP_NUM_THREADS=1": ([], {name: "1" for name in THREAD_VARIABLES}),
+    "--threads 0 (libraries' pools)": (["--threads", "0"], {}),
+}
+
+
+def threads_study(repeat: int) -> int:
+    """Wall time of `darcyan match` with each of THREAD_SETTINGS, idle and beside a busy
+    neighbour (best of ``repeat``): the default must never be much slower than one thread."""
+    def say(*text):
+        print(*text, flush=True)
+
+    big, small = [str(DATA / p) for p in PAIRS["52k"]], [str(DATA / p) for p in PAIRS["5k"]]
+    cache = tempfile.mkdtemp(prefix="darcyan-speed-cache-")
+    base_env = {k: v for k, v in _env(cache).items() if k not in THREAD_VARIABLES}
+    run_process([sys.executable, "-m", "darcyan", "match", *big, "-q"], base_env)  # fill the cache
+    run_process([sys.executable, "-m", "darcyan", "match", *small, "-q"], base_env)
+    jobs = {"warm match, 52k": ["match", *big, "-q"], "cold match, 52k": ["match", *big, "--no-cache", "-q"],
+            "--dense, 5k (cached descriptions)": ["match", *small, "--dense", "-o", os.devnull, "-q"]}
+    say(f"## Threads: `darcyan match` idle and beside a busy neighbour ({os.cpu_count()} CPUs)\n")
+    say("| job | threads | idle s | busy neighbour s |\n|---|---|---:|---:|")
+    for job, argv in jobs.items():
+        for name, (extra, env) in THREAD_SETTINGS.items():
+            times = []
+            for busy in (False, True):
+                neighbour = subprocess.Popen([sys.executable, "-c", BUSY_NEIGHBOUR]) if busy else None
+                try:
+                    time.sleep(0.5 if busy else 0.0)
+                    runs = [run_process([sys.executable, "-m", "darcyan", *argv, *extra], {**base_env, **env})
+                            for _ in range(repeat)]
+                finally:
+                    if neighbour is not None:
+                        neighbour.kill()
+                        neighbour.wait()
+                failed = [r for r in runs if r["code"] != 0]
+                times.append("failed" if failed else fmt(min(r["wall"] for r in runs)))
+            say(f"| {job} | {name} | {times[0]} | {times[1]} |")
+    say("")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--child", help=argparse.SUPPRESS)
@@ -455,6 +500,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--profile-text", help="also write the profiler's full report (by cumulative time) here")
     parser.add_argument("--repeat", type=int, default=1, help="runs of each command-line measurement; the fastest is kept")
     parser.add_argument("--json", help="write the raw measurements to this file")
+    parser.add_argument("--threads-study", action="store_true",
+                        help="only the threads study: `darcyan match` (warm 52k, cold 52k, --dense 5k) with its "
+                             "default threads, with OMP_NUM_THREADS=1 and with --threads 0 (the libraries' own "
+                             "pools), on an idle machine and beside a busy neighbour process")
     parser.add_argument("--threads", type=int, help="BLAS/OpenMP threads of every measured process "
                         "(OPENBLAS/OMP/MKL_NUM_THREADS; default: the environment's). On a shared machine "
                         "1 avoids oversubscription, which slows the eigensolvers of the peers several times")
@@ -468,6 +517,8 @@ def main(argv: list[str] | None = None) -> int:
         result = CHILDREN[task["task"]](task)
         print(RESULT_MARK + json.dumps(result), flush=True)
         return 0
+    if args.threads_study:
+        return threads_study(args.repeat)
 
     missing = [p for pair in args.sizes for p in PAIRS[pair] if not (DATA / p).exists()]
     if missing:
