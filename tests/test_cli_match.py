@@ -89,3 +89,16 @@ def test_pictures_and_truth_take_one_target_and_threads_are_checked(capsys, figu
     assert run(capsys, "match", figures[0], figures[1], "--threads", "2")[0] == 0
     code, _, err = run(capsys, "match", figures[0], figures[1], "--threads", "-1")
     assert code == 2 and "--threads" in err
+
+
+def test_dense_maps_of_targets_with_one_name_are_refused_before_any_work(capsys, figures, tmp_path):
+    other = tmp_path / "elsewhere"
+    other.mkdir()
+    twin = other / figures[1].name
+    twin.write_bytes(figures[1].read_bytes())
+    code, _, err = run(capsys, "match", figures[0], figures[1], twin, "--dense", "-o", tmp_path / "maps")
+    assert code == 2 and "figure1" in err and len(err.strip().splitlines()) == 1
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    code, _, err = run(capsys, "match", figures[0], figures[1], figures[2], "--dense", "-o", blocker)
+    assert code == 2 and "cannot make the folder" in err

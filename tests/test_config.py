@@ -89,3 +89,10 @@ def test_settings_from_a_json_file_reach_every_section(tmp_path, capsys):
     path.write_text(json.dumps({"mirror": {"sample": 400}}))
     assert main(["features", "x.off", "--config", str(path)]) == 2
     assert "unknown setting mirror.sample" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("changes", [{"mirror": {"signature_lengths": 5}}, {"mirror": {"signature_lengths": ["a"]}},
+                                     {"consistency": {"beam_width": True}}, {"levels": True}])
+def test_values_of_the_wrong_kind_are_one_config_error(changes):
+    with pytest.raises(ConfigError):
+        DarcyanConfig().updated(changes)

@@ -244,3 +244,16 @@ def test_binary_ply_with_triangles_and_quads_loads(tmp_path, order, fmt):
     path.write_bytes(header + body[:-3])
     with pytest.raises(MeshError, match="truncated"):
         load_mesh(path)
+
+
+def test_binary_ply_with_a_negative_list_length_is_one_error(tmp_path):
+    import struct
+
+    header = (b"ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+              b"property float z\nelement face 2\nproperty list char int vertex_indices\nend_header\n")
+    body = b"".join(struct.pack("<3f", *p) for p in [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    body += struct.pack("<b4i", 4, 0, 1, 2, 3) + struct.pack("<b", -1) + b"\x00\x00\x00"
+    path = tmp_path / "negative.ply"
+    path.write_bytes(header + body)
+    with pytest.raises(MeshError, match="negative.ply"):
+        load_mesh(path)

@@ -197,3 +197,22 @@ def test_decimated_mesh_prepares_and_describes_with_repair(tosca, reduction):
     assert not len(nonmanifold_vertices(prepared)) and _edge_counts(prepared.faces, prepared.n_vertices)[1].max() == 2
     assert analysis.changes == tuple(changes) and len(analysis.feature_vertices) >= 4
     assert ((0 <= analysis.feature_vertices) & (analysis.feature_vertices < decimated.n_vertices)).all()
+
+
+def test_welded_copies_keep_their_results():
+    """Every vertex of a soup is a copy that repair welds into one prepared vertex: each copy,
+    not only the one kept, gets the kept vertex's place in a dense map (in the input numbering)."""
+    from darcyan import analyze_mesh, match_shapes
+    from darcyan.dense import UNMAPPED, DenseConfig, dense_map
+
+    def soup(mesh):
+        return Mesh(mesh.vertices[mesh.faces].reshape(-1, 3), np.arange(3 * mesh.n_faces).reshape(-1, 3))
+
+    poses = [soup(synthetic.figure(pose, 4)) for pose in (0, 1)]
+    a, b = (analyze_mesh(p, repair=True) for p in poses)
+    assert (a.shape.mesh_index(np.arange(poses[0].n_vertices)) >= 0).all()
+    result = dense_map(a, b, match_shapes(a, b), DenseConfig(basis_size=30, zoomout_samples=500))
+    assert (result.target != UNMAPPED).all()
+    # one numbering for both poses: most copies land on a copy of their own corner
+    same_corner = np.linalg.norm(poses[1].vertices[result.target] - poses[1].vertices, axis=1) < 1e-9
+    assert same_corner.mean() > 0.5

@@ -118,8 +118,8 @@ def cmd_match(args: argparse.Namespace) -> int:
     several = len(targets) > 1
     if several and (args.plot or args.html or args.truth):
         raise DarcyanError("--plot, --html and --truth take one target: match the targets one by one")
-    if several and args.dense and args.output is None:
-        raise DarcyanError("--dense with several targets writes one map per target: give -o FOLDER")
+    if several and args.dense:
+        _dense_folder(args.output, targets)
     form = _output_format(args)
     cache = _cache(args)
     if args.truth:
@@ -161,7 +161,6 @@ def cmd_match(args: argparse.Namespace) -> int:
         results.append((target, correspondence, dense))
     if args.dense and several:
         folder = Path(args.output)
-        folder.mkdir(parents=True, exist_ok=True)
         for target, _, dense in results:
             name = folder / f"{Path(target).stem}.{form}"
             _write_text(_dense_text(args.source, target, dense.target, form), str(name))
@@ -171,6 +170,22 @@ def cmd_match(args: argparse.Namespace) -> int:
     else:
         _write_text(_matches_text(args.source, [(t, c) for t, c, _ in results], form, several), args.output)
     return 0
+
+
+def _dense_folder(output: str | None, targets: list) -> None:
+    """Make the folder of the dense maps of several targets, before any computation; refuse a
+    file there, and targets whose maps would take the same name."""
+    if output is None:
+        raise DarcyanError("--dense with several targets writes one map per target: give -o FOLDER")
+    stems = [Path(t).stem for t in targets]
+    twice = sorted({s for s in stems if stems.count(s) > 1})
+    if twice:
+        raise DarcyanError(f"--dense: several targets are named {twice[0]!r}; their maps would overwrite each "
+                           f"other in {output}: match them one by one")
+    try:
+        Path(output).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise DarcyanError(f"{output}: cannot make the folder for the maps ({exc.strerror or exc})") from None
 
 
 def _output_format(args: argparse.Namespace) -> str:
@@ -422,9 +437,15 @@ def _thread_limit(threads: int):
         raise DarcyanError(f"--threads must be 0 (the libraries' default) or more, got {threads}")
     if threads == 0:
         return contextlib.nullcontext()
+    import os
+
     from threadpoolctl import threadpool_limits
 
-    return threadpool_limits(threads)
+    from .parallel import THREAD_VARIABLES
+
+    for name in THREAD_VARIABLES:  # for the libraries loaded later (scipy's OpenBLAS, OpenMP)
+        os.environ[name] = str(threads)
+    return threadpool_limits(threads)  # for those loaded already (numpy's OpenBLAS)
 
 
 def main(argv: list[str] | None = None) -> int:

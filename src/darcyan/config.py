@@ -53,7 +53,7 @@ class Denoising:
     taubin_mu: float = _stage(-0.53, PREPARE)
 
     def __post_init__(self) -> None:
-        _check(self, ("block", "max_steps"), lambda v: isinstance(v, int) and v >= 1, "a positive integer")
+        _check(self, ("block", "max_steps"), lambda v: _integer(v) and v >= 1, "a positive integer")
         _check(self, ("settled", "noise_roughness"), lambda v: _number(v) and v >= 1, "a factor >= 1")
         _check(self, ("taubin_lambda",), lambda v: _number(v) and 0 < v < 1, "in (0, 1)")
         _check(self, ("taubin_mu",), lambda v: _number(v) and -1 < v < 0, "in (-1, 0)")
@@ -102,7 +102,7 @@ class HeatKernel:
     diffusion_steps: int = _stage(4, DESCRIBE)
 
     def __post_init__(self) -> None:
-        _check(self, ("vertices", "diffusion_steps"), lambda v: isinstance(v, int) and v >= 1, "a positive integer")
+        _check(self, ("vertices", "diffusion_steps"), lambda v: _integer(v) and v >= 1, "a positive integer")
         _check(self, ("decay",), lambda v: _number(v) and v > 0, "positive")
         _check(self, ("tolerance",), lambda v: _number(v) and 0 <= v < 1, "in [0, 1)")
 
@@ -146,7 +146,7 @@ class Consistency:
     def __post_init__(self) -> None:
         _check(self, ("geodesic_tolerance",), lambda v: _number(v) and v > 0, "positive")
         _check(self, ("geodesic",), lambda v: _number(v) and v >= 0, ">= 0")
-        _check(self, ("beam_width",), lambda v: isinstance(v, int) and v >= 1, "a positive integer")
+        _check(self, ("beam_width",), lambda v: _integer(v) and v >= 1, "a positive integer")
 
 
 @dataclass(frozen=True)
@@ -190,17 +190,24 @@ class MirrorTest:
     seed: int = _stage(0, MATCH)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "signature_lengths", tuple(float(x) for x in self.signature_lengths))
+        lengths = self.signature_lengths
+        if not isinstance(lengths, (list, tuple)) or not all(_number(x) for x in lengths):
+            raise ConfigError(f"config: MirrorTest.signature_lengths must be a list of lengths, got {lengths!r}")
+        object.__setattr__(self, "signature_lengths", tuple(float(x) for x in lengths))
         _check(self, ("samples", "neighbours", "target_points", "candidates", "profile_levels"),
-               lambda v: isinstance(v, int) and v >= 1, "a positive integer")
+               lambda v: _integer(v) and v >= 1, "a positive integer")
         _check(self, ("min_sine",), lambda v: _number(v) and 0 <= v < 1, "in [0, 1)")
         _check(self, ("signature_weight", "orientation_weight", "handedness_weight"),
                lambda v: _number(v) and v >= 0, ">= 0")
         _check(self, ("profile_agreement",), lambda v: isinstance(v, (int, float)) and v > 0,
                "positive (inf: trust every profile)")
-        _check(self, ("seed",), lambda v: isinstance(v, int) and v >= 0, "an integer >= 0")
+        _check(self, ("seed",), lambda v: _integer(v) and v >= 0, "an integer >= 0")
         if not self.signature_lengths or min(self.signature_lengths) <= 0:
             raise ConfigError(f"config: mirror.signature_lengths must be positive lengths, got {self.signature_lengths!r}")
+
+
+def _integer(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
 
 
 def _number(value) -> bool:
@@ -310,13 +317,13 @@ class DarcyanConfig:
         positive_ints = ("levels", "radial_lines", "interpolation", "agd_sources")
         for name in positive_ints:
             value = getattr(self, name)
-            if not isinstance(value, int) or value < 1:
+            if not _integer(value) or value < 1:
                 raise ConfigError(f"config: {name} must be a positive integer, got {value!r}")
         if self.radial_lines < 3:
             raise ConfigError("config: radial_lines must be at least 3")
         for name in ("curvature_smoothing", "max_features", "proxy_vertices"):
             value = getattr(self, name)
-            if not isinstance(value, int) or value < 0:
+            if not _integer(value) or value < 0:
                 raise ConfigError(f"config: {name} must be a non-negative integer, got {value!r}")
         if not (isinstance(self.agd_smoothing, (int, float)) and 0 <= self.agd_smoothing < 10):
             raise ConfigError(f"config: agd_smoothing must be a length >= 0, got {self.agd_smoothing!r}")

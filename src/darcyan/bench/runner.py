@@ -373,7 +373,8 @@ def _nearest_samples(path, repair, config, features, vts_path, n_input) -> np.nd
 # Mirror ground truth for identity data, and its validation where .sym.vts exists
 
 
-def class_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: ShapeCache | None = None) -> dict:
+def class_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: ShapeCache | None = None,
+                 config: DarcyanConfig = DarcyanConfig()) -> dict:
     """The mirror map of a class with identity ground truth.
 
     All poses of such a class share one vertex numbering, so a mirror map found on one pose holds
@@ -386,8 +387,8 @@ def class_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: ShapeC
     best = {"shape": None, "residual": None, "vertices": None}
     for name in dataset.classes[cls]:
         path = dataset.shapes[name]
-        arrays, _ = _cached(cache, (file_digest(path), "mirror", f"repair={repair}"),
-                            lambda: _mirror_arrays(path, repair))
+        arrays, _ = _cached(cache, (file_digest(path), "mirror", f"repair={repair}", config.prepare_fingerprint()),
+                            lambda: _mirror_arrays(path, repair, config))
         residual = float(arrays["residual"])
         if best["residual"] is None or residual < best["residual"]:
             best = {"shape": name, "residual": residual, "vertices": None}
@@ -397,8 +398,8 @@ def class_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: ShapeC
     return best
 
 
-def _mirror_arrays(path, repair) -> dict:
-    shape = prepared_shape(path, repair)
+def _mirror_arrays(path, repair, config: DarcyanConfig) -> dict:
+    shape = prepared_shape(path, repair, config)
     mirror = reflection_symmetry(shape.mesh)
     vertices = np.full(shape.n_input_vertices, -1, dtype=np.int64)
     vertices[shape.mesh.input_index] = shape.mesh.input_index[mirror.vertices]
@@ -409,6 +410,7 @@ def _mirror_arrays(path, repair) -> dict:
 
 
 def validate_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: ShapeCache | None = None,
+                    config: DarcyanConfig = DarcyanConfig(),
                     samples: int = MIRROR_VALIDATION_SAMPLES) -> dict | None:
     """Check the derived mirror map against ``.sym.vts`` on a class of a vts dataset.
 
@@ -422,9 +424,9 @@ def validate_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: Sha
         if not sym.is_file():
             continue
         path = dataset.shapes[name]
-        arrays, _ = _cached(cache, (file_digest(path), "mirror", f"repair={repair}"),
-                            lambda: _mirror_arrays(path, repair))
-        shape = prepared_shape(path, repair)
+        arrays, _ = _cached(cache, (file_digest(path), "mirror", f"repair={repair}", config.prepare_fingerprint()),
+                            lambda: _mirror_arrays(path, repair, config))
+        shape = prepared_shape(path, repair, config)
         listed = read_vts(dataset.vts(name), shape.n_input_vertices)
         listed_sym = read_vts(sym, shape.n_input_vertices)
         pick = np.linspace(0, len(listed) - 1, min(samples, len(listed))).astype(np.int64)
@@ -760,12 +762,12 @@ def run_bench(dataset_dir: str | os.PathLike, out: str | os.PathLike, methods=("
     mirrors: dict = {}
     for cls in classes:
         if dataset.truth == "identity":
-            found = class_mirror(dataset, cls, repair, cache)
+            found = class_mirror(dataset, cls, repair, cache, config)
             mirrors[cls] = found["vertices"]
             info["mirror"][cls] = {"source": "derived reflection", "shape": found["shape"],
                                    "residual": found["residual"], "used": found["vertices"] is not None}
         else:
-            check = validate_mirror(dataset, cls, repair, cache)
+            check = validate_mirror(dataset, cls, repair, cache, config)
             info["mirror"][cls] = {"source": ".sym.vts", "validation_of_derived_map": check}
     _save_json(out / SETTINGS, info)
 

@@ -358,7 +358,8 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         local = nearest_rows(r, q)
         timings["zoomout"] = time.perf_counter() - t
     target = np.full(shape_1.n_input_vertices, UNMAPPED, dtype=np.int64)
-    target[shape_1.mesh.input_index] = shape_2.mesh.input_index[local]
+    on_mesh = shape_1.mesh_index(np.arange(shape_1.n_input_vertices))  # welded copies included
+    target[on_mesh >= 0] = shape_2.mesh.input_index[local[on_mesh[on_mesh >= 0]]]
     landmarks = np.stack([shape_1.mesh.input_index[src], shape_2.mesh.input_index[tgt]], axis=1)
     return DenseMap(target, landmarks, timings)
 

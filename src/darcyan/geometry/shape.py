@@ -42,6 +42,8 @@ class Shape:
         normalization: the centring and scale applied to the input.
         changes: the repairs applied (empty without ``repair``).
         denoise_steps: Taubin smoothing steps applied (0: the surface was left as it was).
+        coincident: an input vertex that is not on the prepared mesh but within this distance
+            (prepared units) of one of its vertices is that vertex: a copy that repair welded.
     """
 
     mesh: Mesh
@@ -50,6 +52,7 @@ class Shape:
     normalization: Normalization
     changes: tuple = ()
     denoise_steps: int = 0
+    coincident: float = 0.0
     _memo: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -129,6 +132,13 @@ class Shape:
     def _inverse_index(self) -> np.ndarray:
         inverse = np.full(self.n_input_vertices, -1, dtype=np.int64)
         inverse[self.mesh.input_index[::-1]] = np.arange(self.mesh.n_vertices)[::-1]  # first copy wins
+        missing = np.flatnonzero(inverse < 0)
+        if self.coincident > 0 and len(missing):  # welded copies: the vertex they were welded into
+            from .knn import nearest_rows
+
+            near = nearest_rows(self.mesh.vertices, self.input_positions[missing])
+            gap = np.linalg.norm(self.mesh.vertices[near] - self.input_positions[missing], axis=1)
+            inverse[missing[gap <= self.coincident]] = near[gap <= self.coincident]
         return inverse
 
 
@@ -147,4 +157,9 @@ def prepare_shape(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: b
     normalized, normalization = normalize_mesh(prepared)
     positions = (mesh.vertices - normalization.centre) * normalization.scale
     positions.flags.writeable = False
-    return Shape(normalized, mesh.n_vertices, positions, normalization, tuple(changes), steps)
+    coincident = 0.0
+    if repair and steps == 0:  # copies welded into a vertex sit where it is (denoising moves it)
+        edges = normalized.edges()
+        mean_edge = float(np.linalg.norm(np.diff(normalized.vertices[edges], axis=1), axis=2).mean())
+        coincident = config.repairing.weld_tolerance * mean_edge
+    return Shape(normalized, mesh.n_vertices, positions, normalization, tuple(changes), steps, coincident=coincident)

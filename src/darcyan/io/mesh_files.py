@@ -402,7 +402,10 @@ def _ply_binary_records(data: bytes, body: int, elements: dict, fmt: str, path: 
                 if isinstance(kind, str):
                     columns[p].append(take(kind, 1)[0])
                 else:
-                    columns[p].append(take(kind[1], int(take(kind[0], 1)[0])))
+                    length = int(take(kind[0], 1)[0])
+                    if length < 0:
+                        raise MeshError(path, f"element {name!r}: a list of {length} items")
+                    columns[p].append(take(kind[1], length))
         records[name] = columns
     if pos != len(data):
         raise MeshError(path, f"{len(data) - pos} bytes after the last element the header announces: "
