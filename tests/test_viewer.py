@@ -101,6 +101,7 @@ def colour_mask(image, hex_colour):
     return np.abs(image - rgb).max(axis=-1) <= COLOUR_TOLERANCE
 
 
+@pytest.mark.slow
 def test_matches_viewer_in_chromium(browser, tmp_path):
     poses = synthetic.figure(0, SUBDIVISIONS), synthetic.figure(1, SUBDIVISIONS)
     tips = synthetic.figure_tips(SUBDIVISIONS)
