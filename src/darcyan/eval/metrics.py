@@ -347,8 +347,9 @@ class MatchScore:
 
     Attributes:
         errors: ``(k,)`` geodesic distance on the area-1 target from each matched point to the
-            true one (NaN where the truth does not reach the prepared target).
-        true_points: ``(k,)`` the true correspondents as vertices of the prepared target (-1: unknown).
+            true one (a true correspondent the preparation left out counts at the prepared vertex
+            nearest it, as in ``darcyan bench``).
+        true_points: ``(k,)`` the true correspondents as vertices of the prepared target.
         threshold: a match is correct when its error is at most this.
     """
 
@@ -386,14 +387,11 @@ def score_matches(source, target, correspondence, truth: GroundTruth,
             if len(samples) and int(samples.max()) >= shape.n_input_vertices:
                 raise MeshError(shape.name, f"ground-truth vertex {int(samples.max()) + 1} (1-based) out of range "
                                             f"1..{shape.n_input_vertices}")
-        listed = source.mesh_index(truth.source_samples)
-        on_mesh = listed >= 0
-        if not on_mesh.any():
-            raise MeshError(source.name, "no ground-truth sample lies on the prepared mesh")
+        # as darcyan bench does: a listed vertex the preparation left out counts at its nearest
+        listed = source.mesh_index(truth.source_samples, nearest=True)
         points = source.mesh_index(correspondence.source_vertex)
-        nearest = nearest_samples(source.solver, points, listed[on_mesh])
-        true_input = truth.target_samples[on_mesh][nearest]
-    true_points = target.mesh_index(true_input)
+        true_input = truth.target_samples[nearest_samples(source.solver, points, listed)]
+    true_points = target.mesh_index(true_input, nearest=True)
     matched = target.mesh_index(correspondence.target_vertex)
     errors = np.full(len(true_points), np.nan)
     scale = np.sqrt(target.mesh.area())
