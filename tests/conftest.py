@@ -70,6 +70,22 @@ def figure_poses():
     return synthetic.figure(0), synthetic.figure(1)
 
 
+@pytest.fixture
+def private_cache(tmp_path, monkeypatch):
+    """``$DARCYAN_CACHE`` in the test's own folder (a module's tests all take it with
+    ``pytestmark = pytest.mark.usefixtures("private_cache")``)."""
+    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
+
+
+def run_cli(capsys, *argv) -> tuple[int, str, str]:
+    """``darcyan *argv`` in this process: (exit status, stdout, stderr)."""
+    from darcyan.cli import main
+
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
 def random_rotation(seed: int = 0) -> np.ndarray:
     q, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
     return q * np.sign(np.linalg.det(q))  # a proper rotation

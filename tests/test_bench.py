@@ -6,9 +6,9 @@ import json
 
 import numpy as np
 import pytest
+from conftest import run_cli as run
 
 from darcyan.bench.runner import Progress, default_pairs, discover_dataset, read_pairs, run_bench, shape_class
-from darcyan.cli import main
 from darcyan.errors import DarcyanError
 from darcyan.eval import baselines
 from darcyan.geometry import spectral, synthetic
@@ -47,12 +47,6 @@ def figures(tmp_path_factory, bench_cache):
     for pose in range(3):
         save_mesh(synthetic.figure(pose, subdivisions=FIGURE_SUBDIVISIONS), folder / f"figure{pose}.off")
     return folder
-
-
-def run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def computed_and_reused(err: str) -> tuple:

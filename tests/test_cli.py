@@ -7,10 +7,12 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import run_cli as run
 
-from darcyan.cli import main
 from darcyan.geometry import synthetic
 from darcyan.io.mesh_files import save_mesh
+
+pytestmark = pytest.mark.usefixtures("private_cache")  # each test its own $DARCYAN_CACHE
 
 
 @pytest.fixture(scope="module")
@@ -22,17 +24,6 @@ def pose_files(tmp_path_factory):
         save_mesh(synthetic.figure(pose), path)
         paths.append(path)
     return paths
-
-
-@pytest.fixture(autouse=True)
-def private_cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
-
-
-def run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_match_writes_the_csv_contract(capsys, pose_files, tmp_path):

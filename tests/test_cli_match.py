@@ -6,10 +6,12 @@ import json
 
 import numpy as np
 import pytest
+from conftest import run_cli as run
 
-from darcyan.cli import main
 from darcyan.geometry import synthetic
 from darcyan.io.mesh_files import save_mesh
+
+pytestmark = pytest.mark.usefixtures("private_cache")  # each test its own $DARCYAN_CACHE
 
 SUBDIVISIONS = 4  # 2,562-vertex figures: fast
 
@@ -23,17 +25,6 @@ def figures(tmp_path_factory):
         paths.append(folder / f"figure{pose}.off")
         save_mesh(synthetic.figure(pose, SUBDIVISIONS), paths[-1])
     return paths
-
-
-@pytest.fixture(autouse=True)
-def private_cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
-
-
-def run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_one_source_against_many_targets_equals_the_pairs_one_by_one(capsys, figures):

@@ -23,6 +23,7 @@ import struct
 
 import numpy as np
 import pytest
+from conftest import run_cli as run
 
 from darcyan.cli import main
 from darcyan.config import DarcyanConfig
@@ -34,20 +35,11 @@ from darcyan.method.descriptors import curvature_descriptors
 from darcyan.method.grid import darcyan_grid
 from darcyan.method.pipeline import analyze_mesh, match_shapes
 
+pytestmark = pytest.mark.usefixtures("private_cache")  # each test its own $DARCYAN_CACHE
+
 # A small closed mesh (octahedron, flattened at the bottom so no face is degenerate).
 V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1.5]])
 F = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
-
-
-@pytest.fixture(autouse=True)
-def private_cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
-
-
-def run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 # ------------------------------------------------------------------------------------------------

@@ -895,53 +895,67 @@ def _write_atomic(path: Path, text: str) -> None:
 # Summaries: results.json, pairs.csv, report.md
 
 
-def summarize_records(records: list, threshold: float) -> dict:
-    """``{method: {"overall": {...}, "classes": {class: {...}}}}`` from pair records."""
+def _by_method(records: list, known: tuple) -> dict:
+    """``{method: [records]}``, the ``known`` methods first in their order, then the others."""
     by_method: dict = {}
     for r in records:
         by_method.setdefault(r["method"], []).append(r)
+    order = [m for m in known if m in by_method] + sorted(set(by_method) - set(known))
+    return {m: by_method[m] for m in order}
+
+
+def _split(rows: list, key) -> dict:
+    """``{key(row): [positions in rows]}``, keys sorted."""
+    parts: dict = {}
+    for i, r in enumerate(rows):
+        parts.setdefault(key(r), []).append(i)
+    return dict(sorted(parts.items()))
+
+
+def _class(record: dict) -> str:
+    return record["class"]
+
+
+def _group(record: dict) -> str:
+    return record.get("group", record["class"])  # journals written before groups existed
+
+
+def summarize_records(records: list, threshold: float) -> dict:
+    """``{method: {"overall": {...}, "classes": {class: {...}}, "groups": {group: {...}}}}`` from
+    pair records."""
     methods = {}
-    for method in [m for m in METHODS if m in by_method] + sorted(set(by_method) - set(METHODS)):
-        rows = by_method[method]
+    for method, rows in _by_method(records, METHODS).items():
         scores = [{"features": r["features"], "errors": _array(r["errors"]), "errors_sym": _array(r["errors_sym"]),
                    "repeatable": r["repeatable"], "repeatable_sym": r["repeatable_sym"]} for r in rows]
         classes = {}
-        for cls in sorted({r["class"] for r in rows}):
-            chosen = [s for s, r in zip(scores, rows) if r["class"] == cls]
-            classes[cls] = summarize(chosen, threshold)
-            classes[cls]["pair_seconds"] = float(sum(r["seconds"] for r in rows if r["class"] == cls))
+        for cls, at in _split(rows, _class).items():
+            classes[cls] = summarize([scores[i] for i in at], threshold)
+            classes[cls]["pair_seconds"] = float(sum(rows[i]["seconds"] for i in at))
         overall = summarize(scores, threshold)
         for key in ("rate", "rate_sym", "recall", "recall_sym", "repeatability"):
             values = [c[key] for c in classes.values() if c[key] is not None]
             overall[f"{key}_class_mean"] = float(np.mean(values)) if values else None
         overall["pair_seconds"] = float(sum(r["seconds"] for r in rows))
-        groups = {}
-        for group in sorted({r.get("group", r["class"]) for r in rows}):
-            chosen = [s for s, r in zip(scores, rows) if r.get("group", r["class"]) == group]
-            groups[group] = summarize(chosen, threshold)
+        groups = {g: summarize([scores[i] for i in at], threshold) for g, at in _split(rows, _group).items()}
         methods[method] = {"overall": overall, "classes": classes, "groups": groups}
     return methods
 
 
 def summarize_dense(records: list) -> dict:
-    """``{method: {"overall", "classes": {class: ...}, "pairs": [...]}}`` from dense pair records.
+    """``{method: {"overall", "classes": {class: ...}, "groups": {group: ...}, "pairs": [...]}}``
+    from dense pair records.
 
-    Per class and overall: ``pairs``, ``failed`` (pairs without a map), ``samples``, ``within``,
-    ``rate`` (within / samples, pooled), ``mean_error`` (over the mapped samples), ``curve``
-    (pooled cumulative curve over ``CURVE_TAUS``), ``seconds`` (sum of the dense stages) and
-    ``seconds_per_pair``; overall also ``rate_class_mean``.
+    Per class, group and overall: ``pairs``, ``failed`` (pairs without a map), ``samples``,
+    ``within``, ``rate`` (within / samples, pooled), ``mean_error`` (over the mapped samples),
+    ``curve`` (pooled cumulative curve over ``CURVE_TAUS``), ``seconds`` (sum of the dense
+    stages) and ``seconds_per_pair``; overall also ``rate_class_mean``.
     """
-    by_method: dict = {}
-    for r in records:
-        by_method.setdefault(r["method"], []).append(r)
     out = {}
-    for method in [m for m in DENSE_METHODS if m in by_method] + sorted(set(by_method) - set(DENSE_METHODS)):
-        rows = by_method[method]
-        classes = {cls: _pool_dense([r for r in rows if r["class"] == cls]) for cls in sorted({r["class"] for r in rows})}
+    for method, rows in _by_method(records, DENSE_METHODS).items():
+        classes = {c: _pool_dense([rows[i] for i in at]) for c, at in _split(rows, _class).items()}
         overall = _pool_dense(rows)
         overall["rate_class_mean"] = float(np.mean([c["rate"] for c in classes.values()])) if classes else None
-        groups = {g: _pool_dense([r for r in rows if r.get("group", r["class"]) == g])
-                  for g in sorted({r.get("group", r["class"]) for r in rows})}
+        groups = {g: _pool_dense([rows[i] for i in at]) for g, at in _split(rows, _group).items()}
         out[method] = {"overall": overall, "classes": classes, "groups": groups, "pairs": rows}
     return out
 

@@ -125,17 +125,6 @@ class DenseMap:
 # Landmarks
 
 
-def _to_local(mesh: Mesh, input_vertices: np.ndarray) -> np.ndarray:
-    """Indices of ``mesh`` of vertices given in input numbering (-1 when left out)."""
-    lookup = np.full(int(mesh.input_index.max()) + 1, -1, dtype=np.int64)
-    lookup[mesh.input_index] = np.arange(mesh.n_vertices)
-    input_vertices = np.asarray(input_vertices, dtype=np.int64)
-    inside = (input_vertices >= 0) & (input_vertices < len(lookup))
-    out = np.full(len(input_vertices), -1, dtype=np.int64)
-    out[inside] = lookup[input_vertices[inside]]
-    return out
-
-
 def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float, floor: float,
                          cost: np.ndarray | None = None) -> np.ndarray:
     """The largest set of matches whose pairwise geodesic distances agree on both shapes.

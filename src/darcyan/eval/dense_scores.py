@@ -6,9 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dense.maps import _to_local
 from ..geometry.geodesics import GeodesicSolver
-from ..geometry.mesh import Mesh
+from ..geometry.mesh import Mesh, local_index
 from .metrics import DEFAULT_THRESHOLD, GroundTruth, cumulative_curve
 
 DENSE_SAMPLE = 1000  # source vertices scored by evaluate_dense
@@ -71,14 +70,14 @@ def evaluate_dense_maps(source_mesh: Mesh, target_mesh: Mesh, targets: dict, tru
         true_targets = np.asarray(truth.target_samples, dtype=np.int64)
     targets = {name: np.asarray(t, dtype=np.int64) for name, t in targets.items()}
     shortest = min((len(t) for t in targets.values()), default=0)
-    in_source = _to_local(source_mesh, candidates) >= 0
-    true_local = _to_local(target_mesh, true_targets)
+    in_source = local_index(source_mesh, candidates) >= 0
+    true_local = local_index(target_mesh, true_targets)
     usable = np.flatnonzero(in_source & (true_local >= 0) & (candidates < shortest))
     if len(usable) > sample:
         usable = np.sort(np.random.default_rng(seed).choice(usable, size=sample, replace=False))
     sources = candidates[usable]
     truth_local = true_local[usable]
-    mapped = {name: _to_local(target_mesh, t[sources]) for name, t in targets.items()}
+    mapped = {name: local_index(target_mesh, t[sources]) for name, t in targets.items()}
     errors = {name: np.full(len(sources), np.inf) for name in targets}
     solver = target_solver or GeodesicSolver(target_mesh)
     scale = np.sqrt(target_mesh.area())

@@ -148,6 +148,19 @@ def normalize_mesh(mesh: Mesh) -> tuple[Mesh, Normalization]:
     return mesh.with_vertices((mesh.vertices - centre) * scale), Normalization(centre, scale)
 
 
+def local_index(mesh: Mesh, input_vertices) -> np.ndarray:
+    """``(k,) int64``: for vertices given in the input's numbering, their index in ``mesh``
+    (through ``mesh.input_index``; the first copy of a split vertex), -1 for a vertex ``mesh``
+    does not hold."""
+    lookup = np.full(int(mesh.input_index.max(initial=-1)) + 1, -1, dtype=np.int64)
+    lookup[mesh.input_index[::-1]] = np.arange(mesh.n_vertices)[::-1]  # first copy wins
+    input_vertices = np.asarray(input_vertices, dtype=np.int64).reshape(-1)
+    inside = (input_vertices >= 0) & (input_vertices < len(lookup))
+    out = np.full(len(input_vertices), -1, dtype=np.int64)
+    out[inside] = lookup[input_vertices[inside]]
+    return out
+
+
 def boundary_vertices(mesh: Mesh) -> np.ndarray:
     """``(n,) bool``: vertices on an edge used by only one face."""
     n = mesh.n_vertices

@@ -21,7 +21,7 @@ from ..errors import MeshError
 from .curvature import Curvatures, principal_curvatures
 from .denoise import denoise_mesh
 from .geodesics import GeodesicSolver, vertex_normals
-from .mesh import Mesh, MeshWarning, Normalization, normalize_mesh
+from .mesh import Mesh, MeshWarning, Normalization, local_index, normalize_mesh
 from .operators import cotangent_laplacian, mixed_voronoi_area
 from .repair import prepare_mesh
 from .spectral import SHIFT, Spectrum, laplace_beltrami_spectrum
@@ -130,8 +130,7 @@ class Shape:
 
     @cached_property
     def _inverse_index(self) -> np.ndarray:
-        inverse = np.full(self.n_input_vertices, -1, dtype=np.int64)
-        inverse[self.mesh.input_index[::-1]] = np.arange(self.mesh.n_vertices)[::-1]  # first copy wins
+        inverse = local_index(self.mesh, np.arange(self.n_input_vertices))
         missing = np.flatnonzero(inverse < 0)
         if self.coincident > 0 and len(missing):  # welded copies: the vertex they were welded into
             from .knn import nearest_rows

@@ -88,18 +88,20 @@ def average_geodesic_distance(mesh: Mesh, solver: GeodesicSolver, sources: int, 
 
 
 def heat_diffuse(mesh: Mesh, values: np.ndarray, length: float, area: np.ndarray | None = None,
-                 steps: int = HeatKernel().diffusion_steps) -> np.ndarray:
+                 steps: int = HeatKernel().diffusion_steps, laplacian=None) -> np.ndarray:
     """Diffuse ``values (n,)`` for the time that spreads heat over about ``length``: ``steps``
-    backward Euler steps of du/dt = Laplace(u) with total time length**2 / 2 (one factorization)."""
+    backward Euler steps of du/dt = Laplace(u) with total time length**2 / 2 (one factorization).
+    ``area`` (mixed Voronoi) and ``laplacian`` (cotangent), if already computed for ``mesh``."""
     import scipy.sparse as sp
     from scipy.sparse.linalg import splu
 
     from ..geometry.operators import cotangent_laplacian
 
     area = mixed_voronoi_area(mesh) if area is None else area
+    laplacian = cotangent_laplacian(mesh) if laplacian is None else laplacian
     step = length**2 / 2 / steps
     mass = sp.diags(area)
-    solve = splu((mass - step * cotangent_laplacian(mesh)).tocsc()).solve
+    solve = splu((mass - step * laplacian).tocsc()).solve
     for _ in range(steps):
         values = solve(mass @ values)
     return values

@@ -88,7 +88,8 @@ def reference_direction(mesh: Mesh, vertex: int, toward_field: np.ndarray, norma
 
 
 def darcyan_grids(mesh: Mesh, solver: GeodesicSolver | LocalGeodesicSolver, vertices, config: DarcyanConfig,
-                  distances: dict | None = None, toward: np.ndarray | None = None) -> list[DarcyanGrid]:
+                  distances: dict | None = None, toward: np.ndarray | None = None,
+                  normals: np.ndarray | None = None) -> list[DarcyanGrid]:
     """Darcyan coordinate systems around several vertices.
 
     Args:
@@ -101,13 +102,14 @@ def darcyan_grids(mesh: Mesh, solver: GeodesicSolver | LocalGeodesicSolver, vert
         toward: ``(n_vertices,)`` distance field whose source fixes angle 0 at every centre (the
             pipeline uses the shape's centre, the vertex of least AGD); by default each grid looks
             toward the vertex farthest from its centre.
+        normals: ``(n_vertices, 3)`` the mesh's vertex normals, if already computed.
 
     Returns:
         One :class:`DarcyanGrid` per vertex.
     """
     distances = {} if distances is None else distances
     local = solver if isinstance(solver, LocalGeodesicSolver) else LocalGeodesicSolver(solver, np.inf)
-    normals = vertex_normals(mesh)
+    normals = vertex_normals(mesh) if normals is None else normals
     radii = np.asarray(config.level_radii)
     q = config.interpolation
     angles = 2 * np.pi * np.arange(config.radial_lines * q) / (config.radial_lines * q)

@@ -203,7 +203,8 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
         coarse = average_geodesic_distance(proxy.mesh, proxy.solver, config.agd_sources)
         values = proxy.to_full(coarse.values)
         if config.agd_smoothing > 0:
-            values = heat_diffuse(normalized, values, config.agd_smoothing, curvatures.area, config.heat.diffusion_steps)
+            values = heat_diffuse(normalized, values, config.agd_smoothing, curvatures.area, config.heat.diffusion_steps,
+                                  shape.laplacian)
         agd = AGD(values, coarse.sources)
     done("agd")
     stage("features")
@@ -223,7 +224,7 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
     stage("descriptors")
     centre_vertex = int(np.argmin(agd.values))
     centre = solver.distance(centre_vertex) if proxy is None else proxy.distance(centre_vertex)
-    grids = darcyan_grids(normalized, local, features.vertices, config, distances, toward=centre)
+    grids = darcyan_grids(normalized, local, features.vertices, config, distances, toward=centre, normals=shape.normals)
     descriptors = curvature_descriptors(normalized, grids, curvatures)
     if not np.isfinite(descriptors).any(axis=1).any():
         raise MeshError(shape.name, f"mesh too small to carry a Darcyan grid of radius {config.radius} "
