@@ -89,6 +89,9 @@ def test_settings_from_a_json_file_reach_every_section(tmp_path, capsys):
     path.write_text(json.dumps({"mirror": {"sample": 400}}))
     assert main(["features", "x.off", "--config", str(path)]) == 2
     assert "unknown setting mirror.sample" in capsys.readouterr().err
+    path.write_text(json.dumps({"mirror": {"samples": "many"}}))
+    assert main(["features", "x.off", "--config", str(path)]) == 2
+    assert capsys.readouterr().err.startswith(f"darcyan: error: {path}: config: MirrorTest.samples")
 
 
 @pytest.mark.parametrize("changes", [{"mirror": {"signature_lengths": 5}}, {"mirror": {"signature_lengths": ["a"]}},

@@ -15,7 +15,7 @@ import numpy as np
 
 from ._version import __version__
 from .config import MATCHING_MODES, DarcyanConfig
-from .errors import DarcyanError
+from .errors import ConfigError, DarcyanError
 from .geometry.mesh import MeshWarning
 from .io.cache import ShapeCache
 
@@ -67,7 +67,11 @@ def _config(args: argparse.Namespace) -> DarcyanConfig:
     """The defaults (or the paper's setup with ``--paper``), changed by the options given."""
     base = DarcyanConfig.paper() if getattr(args, "paper", False) else DarcyanConfig()
     if getattr(args, "config", None):
-        base = base.updated(_read_json(args.config), args.config)
+        try:
+            base = base.updated(_read_json(args.config), args.config)
+        except ConfigError as exc:  # name the file whose value it is
+            message = str(exc)
+            raise ConfigError(message if message.startswith(args.config) else f"{args.config}: {message}") from None
     values = {name: getattr(args, name) for name in CONFIG_HELP if getattr(args, name, None) is not None}
     if getattr(args, "matching", None):
         values["matching"] = args.matching
