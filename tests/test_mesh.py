@@ -1,6 +1,5 @@
 """Reading, writing, checking and repairing meshes."""
 
-import warnings
 
 import numpy as np
 import pytest

@@ -206,6 +206,29 @@ class MirrorTest:
             raise ConfigError(f"config: mirror.signature_lengths must be positive lengths, got {self.signature_lengths!r}")
 
 
+@dataclass(frozen=True)
+class CutRims:
+    """Partial shapes: where a part was cut away, the cut's rim is not an extremity.
+
+    AGD grows toward the end of a limb; cut the limb and its largest value sits on the cut's rim,
+    where no counterpart exists on a whole shape. Boundary loops at least ``min_length`` long
+    count as cut rims, and no feature point is taken within ``clearance`` of one (nor is one moved
+    there as a sharpest tip). Shorter loops are holes that leave the extremity in place: the
+    mouth of TOSCA's men (0.05 from end to end, at 0.02 from the head's feature point), the
+    cat's 0.079; limbs cut by the partial benchmark left rims of 0.12 to 2 (docs/parameters.md).
+
+    Attributes:
+        min_length: a boundary loop this long (sqrt(area)) or longer is a cut's rim (0: none is).
+        clearance: feature points stay at least this far (sqrt(area)) from a cut's rim.
+    """
+
+    min_length: float = _stage(0.1, DESCRIBE)
+    clearance: float = _stage(0.05, DESCRIBE)
+
+    def __post_init__(self) -> None:
+        _check(self, ("min_length", "clearance"), lambda v: _number(v) and v >= 0, ">= 0")
+
+
 def _integer(value) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
 
@@ -222,7 +245,7 @@ def _check(section, names, ok, what: str) -> None:
 
 
 SECTIONS = {"repairing": Repairing, "denoising": Denoising, "heat": HeatKernel, "margins": GeodesicMargins, "consistency": Consistency,
-            "mirror": MirrorTest}
+            "mirror": MirrorTest, "rims": CutRims}
 
 
 @dataclass(frozen=True)
@@ -284,6 +307,7 @@ class DarcyanConfig:
         margins: :class:`GeodesicMargins`, how far exact geodesics reach around a feature point.
         consistency: :class:`Consistency`, the weights of the layout-keeping matcher.
         mirror: :class:`MirrorTest`, the test that rejects mirror-image matchings.
+        rims: :class:`CutRims`, how a partial shape's cut is kept from being an extremity.
 
     Every field changes one stage: preparing a mesh, describing a shape or matching two;
     :meth:`fingerprint` derives cache keys from the fields of the stages a result depends on.
@@ -312,6 +336,7 @@ class DarcyanConfig:
     margins: GeodesicMargins = _stage(GeodesicMargins(), DESCRIBE)
     consistency: Consistency = _stage(Consistency(), MATCH)
     mirror: MirrorTest = _stage(MirrorTest(), MATCH)
+    rims: CutRims = _stage(CutRims(), DESCRIBE)
 
     def __post_init__(self) -> None:
         positive_ints = ("levels", "radial_lines", "interpolation", "agd_sources")
@@ -399,11 +424,12 @@ class DarcyanConfig:
 
     @classmethod
     def paper(cls, **changes) -> "DarcyanConfig":
-        """The paper's method as published: plain AGD maxima, no denoising, nearest-descriptor matching.
+        """The paper's method as published: plain AGD maxima, no denoising, nearest-descriptor matching,
+        no notion of a cut's rim.
         (Its AGD floor stays at the median, where the paper columns of the README were measured:
         the floor's default came down for diffused AGD, which the paper does not use.)"""
         return cls(agd_smoothing=0.0, extremity_radius=0.15, min_agd_quantile=0.5, denoise_area_ratio=0.0, tip_gain=0.0,
-                   matching="nearest", max_match_distance=0.0).replace(**changes)
+                   matching="nearest", max_match_distance=0.0, rims=CutRims(min_length=0.0)).replace(**changes)
 
     @property
     def level_radii(self) -> "list[float]":

@@ -117,10 +117,6 @@ def face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------------------------
-# Reading
-
-
-# ----------------------------------------------------------------------------------------------
 # Scale normalization
 
 
@@ -170,6 +166,30 @@ def boundary_vertices(mesh: Mesh) -> np.ndarray:
     mask[once // max(n, 1)] = True
     mask[once % max(n, 1)] = True
     return mask
+
+
+def boundary_loops(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """The boundary's loops: ``label (n,) int64`` (-1 off the boundary, else the loop's number)
+    and ``length (loops,)`` of each loop (mesh units). Loops that touch at a vertex count as one."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    n = mesh.n_vertices
+    keys, counts = _edge_counts(mesh.faces, n)
+    once = keys[counts == 1]
+    a, b = once // max(n, 1), once % max(n, 1)
+    label = np.full(n, -1, dtype=np.int64)
+    if len(once) == 0:
+        return label, np.zeros(0)
+    on = np.unique(np.concatenate([a, b]))
+    local = np.full(n, -1, dtype=np.int64)
+    local[on] = np.arange(len(on))
+    graph = sp.coo_matrix((np.ones(len(a)), (local[a], local[b])), shape=(len(on), len(on)))
+    count, component = connected_components(graph, directed=False)
+    label[on] = component
+    lengths = np.bincount(component[local[a]], weights=np.linalg.norm(mesh.vertices[a] - mesh.vertices[b], axis=1),
+                          minlength=count)
+    return label, lengths
 
 
 # ----------------------------------------------------------------------------------------------

@@ -35,10 +35,12 @@ class AGD:
 
 @dataclass(frozen=True)
 class FeaturePoints:
-    """Extremities: ``vertices (k,) int64`` ordered by decreasing ``agd (k,)``."""
+    """Extremities: ``vertices (k,) int64`` ordered by decreasing ``agd (k,)``; ``at_rims``: how
+    many more there would be without the cut rims kept out (see :func:`extremities`)."""
 
     vertices: np.ndarray
     agd: np.ndarray
+    at_rims: int = 0
 
     def __len__(self) -> int:
         return len(self.vertices)
@@ -135,14 +137,17 @@ def heat_kernel_diagonal(mesh: Mesh, length: float, heat: HeatKernel = HeatKerne
 
 
 def extremities(mesh: Mesh, solver: GeodesicSolver | LocalGeodesicSolver, agd: AGD, config: DarcyanConfig,
-                distance_cache: dict | None = None) -> FeaturePoints:
+                distance_cache: dict | None = None, near_rim: np.ndarray | None = None) -> FeaturePoints:
     """Local maxima of AGD over a geodesic ball of radius ``config.extremity_radius``.
 
     Candidates are one-ring maxima above the ``min_agd_quantile`` of AGD, visited by decreasing
     AGD; one is kept when no kept point lies within the radius and no vertex within the radius
     has a larger AGD (checked on its own fast-marching field, which ``distance_cache`` keeps for
     the grid built around it next). A :class:`LocalGeodesicSolver` needs a radius of at least
-    ``config.extremity_radius``.
+    ``config.extremity_radius``. Maxima where ``near_rim (n,) bool`` holds (near a cut's rim,
+    :func:`cut_rim_zone`) are left out at the end: AGD peaks on a rim because the part beyond
+    it is missing. Such a peak still suppresses the smaller maxima within the radius, which lie
+    on the slope of the cut limb, not at an extremity.
     """
     values = agd.values
     floor = np.quantile(values, config.min_agd_quantile)
@@ -168,11 +173,29 @@ def extremities(mesh: Mesh, solver: GeodesicSolver | LocalGeodesicSolver, agd: A
         if config.max_features and len(kept) >= config.max_features:
             break
     kept_arr = np.array(kept, dtype=np.int64)
-    return FeaturePoints(kept_arr, values[kept_arr])
+    at_rim = np.zeros(len(kept_arr), bool) if near_rim is None else near_rim[kept_arr]
+    kept_arr = kept_arr[~at_rim]
+    return FeaturePoints(kept_arr, values[kept_arr], int(at_rim.sum()))
+
+
+def cut_rim_zone(mesh: Mesh, solver: GeodesicSolver, config: DarcyanConfig) -> tuple[np.ndarray | None, int]:
+    """``(n,) bool`` the vertices within ``config.rims.clearance`` of a cut's rim (a boundary loop
+    at least ``config.rims.min_length`` long), or ``None`` where there is none; and how many such
+    loops there are."""
+    from ..geometry.mesh import boundary_loops
+
+    if config.rims.min_length <= 0:
+        return None, 0
+    label, lengths = boundary_loops(mesh)
+    long_loops = np.flatnonzero(lengths >= config.rims.min_length)
+    if len(long_loops) == 0:
+        return None, 0
+    rim = np.flatnonzero(np.isin(label, long_loops))
+    return solver.distance_multi(rim) <= config.rims.clearance, len(long_loops)
 
 
 def sharpest_tips(features: FeaturePoints, values: np.ndarray, heat: np.ndarray, distances: dict,
-                  config: DarcyanConfig) -> FeaturePoints:
+                  config: DarcyanConfig, near_rim: np.ndarray | None = None) -> FeaturePoints:
     """Move each feature point to the sharpest tip of its extremity.
 
     The extremity's top is the part of the feature point's geodesic ball of radius
@@ -183,17 +206,21 @@ def sharpest_tips(features: FeaturePoints, values: np.ndarray, heat: np.ndarray,
     feature point; it stays otherwise (a hand's fingertips are no sharper than its middle at this
     scale: it stays put). ``distances`` holds each feature point's distance field (from
     :func:`extremities`; beyond a :class:`LocalGeodesicSolver`'s radius its estimate does).
-    Returned in decreasing AGD.
+    No point moves where ``near_rim (n,) bool`` holds (a cut's rim, where the heat kernel of a
+    surface with a boundary is highest). Returned in decreasing AGD.
     """
     found = [int(v) for v in features.vertices]
     kept = list(found)
     for i, v in enumerate(found):
         d = distances[v]
-        top = np.flatnonzero((d <= config.tip_radius) & (values >= values[v] - config.tip_agd_drop))
+        top = (d <= config.tip_radius) & (values >= values[v] - config.tip_agd_drop)
+        top = np.flatnonzero(top if near_rim is None else top & ~near_rim)
+        if len(top) == 0:
+            continue
         u = int(top[np.argmax(heat[top])])
         apart = all(distances[w][u] > config.extremity_radius for w in found if w != v)
         if heat[u] >= config.tip_gain * heat[v] and apart:
             kept[i] = u
     vertices = np.array(kept, dtype=np.int64)
     vertices = vertices[np.argsort(-values[vertices], kind="stable")]
-    return FeaturePoints(vertices, values[vertices])
+    return FeaturePoints(vertices, values[vertices], features.at_rims)

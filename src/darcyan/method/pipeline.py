@@ -32,6 +32,7 @@ from .features import (
     AGD,
     FeaturePoints,
     average_geodesic_distance,
+    cut_rim_zone,
     extremities,
     heat_diffuse,
     heat_kernel_diagonal,
@@ -214,12 +215,18 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
     local = LocalGeodesicSolver(solver, max(config.extremity_radius, grid_reach(config)),
                                 None if proxy is None else proxy.distance, config.margins.ball)
     distances: dict = {}
-    features = extremities(normalized, local, agd, config, distances)
+    near_rim, rims = cut_rim_zone(normalized, solver, config)
+    features = extremities(normalized, local, agd, config, distances, near_rim)
+    if features.at_rims:
+        warnings.warn(f"{shape.name}: an open surface ({rims} boundary loop{'s' if rims > 1 else ''} at least "
+                      f"{config.rims.min_length:g} sqrt(area) long: a partial shape?); {features.at_rims} "
+                      f"extremit{'ies' if features.at_rims > 1 else 'y'} at the rim of a cut left out",
+                      MeshWarning, stacklevel=2)
     if len(features) == 0:
         raise MeshError(shape.name, "no feature points found (no extremity stands out on this shape)")
     if config.tip_gain > 0 and config.agd_smoothing > 0:
         heat = _heat_kernel(shape, proxy, config)
-        features = sharpest_tips(features, agd.values, heat, distances, config)
+        features = sharpest_tips(features, agd.values, heat, distances, config, near_rim)
     done("features")
     stage("descriptors")
     centre_vertex = int(np.argmin(agd.values))
