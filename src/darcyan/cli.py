@@ -401,7 +401,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "ground truth and prints the matches and how many are correct.")
     p.set_defaults(func=cmd_demo)
 
-    from .bench.runner import METHODS
+    from .bench import METHODS
     from .eval.dense_scores import DENSE_SAMPLE, DENSE_SEED
     from .eval.metrics import DEFAULT_THRESHOLD
 

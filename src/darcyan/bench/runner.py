@@ -71,9 +71,8 @@ from ..geometry import spectral as lbo
 from ..geometry.shape import Shape
 from ..io.cache import ShapeCache, code_digest, file_digest
 from ..parallel import process_map
+from . import DENSE_METHODS, METHODS
 
-METHODS = ("darcyan", "hks", "wks", "pyfm")
-DENSE_METHODS = ("darcyan", "pyfm")  # dense maps of --dense (pyfm only when it is among the methods)
 DENSE = "dense"  # the "kind" of a dense record in the journal (sparse records have no kind)
 MESH_SUFFIXES = (".off", ".ply", ".obj")
 TRUTH_FOLDER = "corres"

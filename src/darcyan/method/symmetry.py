@@ -144,11 +144,14 @@ class MirrorTestPoints:
         samples: ``(s,)`` vertices of shape 1, the corners of the test triangles.
         targets: ``(t,)`` vertices of shape 2 among which the samples' images are looked for.
         neighbours: ``(s, k)`` each sample's ``k`` nearest other samples (positions in ``samples``).
+        sines: ``(s * k (k - 1) / 2,)`` the signed sine of each test triangle's corner on shape 1
+            (sample, then pairs of its neighbours in ``np.triu_indices`` order).
     """
 
     samples: np.ndarray
     targets: np.ndarray
     neighbours: np.ndarray
+    sines: np.ndarray
 
 
 def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface,
@@ -167,7 +170,17 @@ def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface,
     many = n2 > test.target_points
     targets = np.sort(sample_vertices(n2, test.target_points, rng, surface_2.areas)) if many else np.arange(n2)
     near = nearest_neighbours(surface_1.points[drawn], min(test.neighbours, len(drawn) - 1))
-    return MirrorTestPoints(drawn, targets, near)
+    p, q, r = _triangles(near)
+    sines = _corner_sine(surface_1.points[drawn], surface_1.normals[drawn][p], p, q, r)
+    return MirrorTestPoints(drawn, targets, near, sines)
+
+
+def _triangles(near: np.ndarray) -> tuple:
+    """``(p, q, r)`` every test triangle (a sample, two of its neighbours) as positions in the
+    samples, from ``near (s, k)`` of :func:`mirror_test_points`."""
+    first, second = np.triu_indices(near.shape[1], k=1)
+    p = np.repeat(np.arange(len(near)), len(first))
+    return p, near[:, first].ravel(), near[:, second].ravel()
 
 
 def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface, landmarks_1: np.ndarray,
@@ -189,12 +202,9 @@ def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface
         embed_1 = np.hstack([embed_1, test.signature_weight * surface_1.signature[samples]])
         embed_2 = np.hstack([embed_2, test.signature_weight * surface_2.signature[targets]])
     image = targets[nearest_points(embed_2, embed_1)]  # each sample's image on shape 2
-    x = surface_1.points[samples]
-    # Every triangle (sample, two of its neighbours) at once.
-    first, second = np.triu_indices(near.shape[1], k=1)
-    p = np.repeat(np.arange(len(samples)), len(first))
-    q, r = near[:, first].ravel(), near[:, second].ravel()
-    s1 = _corner_sine(x, surface_1.normals[samples][p], p, q, r)
+    # Every triangle (sample, two of its neighbours) at once; on shape 1 they were measured once.
+    p, q, r = _triangles(near)
+    s1 = points.sines
     s2 = _corner_sine(surface_2.points[image], surface_2.normals[image][p], p, q, r)
     ok = (np.abs(s1) >= test.min_sine) & (np.abs(s2) >= test.min_sine)
     votes = np.sign(s1[ok]) * np.sign(s2[ok])
