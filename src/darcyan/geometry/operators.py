@@ -56,3 +56,13 @@ def nondegenerate_faces(mesh: Mesh, keep_collinear: bool = False) -> np.ndarray:
     if keep_collinear:
         return f[(a != b).any(axis=1) & (b != c).any(axis=1) & (c != a).any(axis=1)]
     return f[np.linalg.norm(np.cross(b - a, c - a), axis=1) > 0]
+
+
+def face_gradients(mesh: Mesh, fields: np.ndarray) -> np.ndarray:
+    """``(m, 3, k)`` the gradient of each of ``fields (n, k)`` (piecewise linear over the faces)
+    on each face, in the face's plane (libigl's ``grad``)."""
+    import igl  # lazily: igl imports scipy
+
+    fields = np.asarray(fields, dtype=np.float64).reshape(mesh.n_vertices, -1)
+    gradient = igl.grad(mesh.vertices, mesh.faces) @ fields  # (3m, k): all x, then all y, then all z
+    return np.nan_to_num(gradient.reshape(3, mesh.n_faces, -1).transpose(1, 0, 2))
