@@ -242,3 +242,70 @@ def test_cli_show_grid_and_match_plot(poses, tmp_path, capsys, monkeypatch):
     with pytest.raises(SystemExit) as exc:
         main(["show-grid", str(files[0]), "--vertex", "1", "--feature", "0", "-o", "x.png"])
     assert exc.value.code == 2
+
+
+# ---------------------------------------------------------------------------------------------
+# Dense maps: texture transfer and errors
+
+
+def _dense(target):
+    from darcyan.dense.maps import DenseMap
+
+    return DenseMap(np.asarray(target, dtype=np.int64), np.zeros((0, 2), np.int64))
+
+
+@pytest.mark.slow
+def test_dense_scene_carries_the_colours_through_the_map(poses):
+    from darcyan.geometry.shape import prepare_shape
+
+    source, target = (prepare_shape(m) for m in poses)
+    n = source.mesh.n_vertices
+    identity = viz.dense_scene(source, target, _dense(np.arange(n)), GroundTruth.identity())
+    # the figure's poses share one numbering: through the identity every vertex keeps its colour
+    assert np.array_equal(identity.target_colours, identity.source_colours)
+    assert identity.sample_errors.max() == 0
+    # colours are a smooth function of position (0.85 of the range per span of the shape along
+    # an axis: Lipschitz), and the shape spans most of each channel
+    v, edges = source.mesh.vertices, source.mesh.edges()
+    span = np.ptp(v - v.mean(axis=0), axis=0).min()
+    step = np.abs(np.diff(identity.source_colours[edges], axis=1)).max(axis=(1, 2))
+    assert (step <= 0.85 * np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1) / span * 2 + 1e-9).all()
+    assert np.ptp(identity.source_colours, axis=0).min() > 0.8
+    # a map that sends every vertex to one point paints the whole target in one colour, and errs
+    constant = viz.dense_scene(source, target, _dense(np.full(n, 7)), GroundTruth.identity())
+    assert np.ptp(constant.target_colours, axis=0).max() == 0
+    assert np.median(constant.sample_errors) > 0.1
+
+
+@pytest.mark.slow
+def test_dense_picture_has_three_panels_with_truth_and_colours_through_the_map(poses, tmp_path):
+    from darcyan.geometry.shape import prepare_shape
+
+    source, target = (prepare_shape(m) for m in poses)
+    n = source.mesh.n_vertices
+    scene = viz.dense_scene(source, target, _dense(np.arange(n)), GroundTruth.identity())
+    picture = viz.render_dense(scene, tmp_path / "dense.png")
+    assert set(picture.panels) == {"source", "target", "errors"}
+    image = read(picture.path)
+    for name in ("source", "target"):
+        panel = crop(image, picture.panels[name])
+        saturation = panel.max(axis=-1) - panel.min(axis=-1)
+        assert (saturation > 0.15).mean() > 0.05, name  # coloured, not grey
+    untrue = viz.dense_scene(source, target, _dense(np.arange(n)), None)
+    assert set(viz.render_dense(untrue, tmp_path / "two.png").panels) == {"source", "target"}
+
+
+@pytest.mark.slow
+def test_cli_dense_plot_and_html(poses, tmp_path, capsys, monkeypatch):
+    pytest.importorskip("plotly")
+    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
+    files = []
+    for i, mesh in enumerate(poses):
+        files.append(tmp_path / f"figure{i}.off")
+        save_mesh(mesh, files[-1])
+    assert main(["match", str(files[0]), str(files[1]), "--dense", "-o", str(tmp_path / "map.csv"), "--truth",
+                 "identity", "--plot", str(tmp_path / "map.png"), "--html", str(tmp_path / "map.html")]) == 0
+    said = capsys.readouterr().err
+    assert "orientation agreement" in said and "map.png" in said and "map.html" in said
+    assert (tmp_path / "map.png").stat().st_size > 10_000
+    assert "vertexcolor" in (tmp_path / "map.html").read_text()

@@ -153,11 +153,19 @@ def cmd_match(args: argparse.Namespace) -> int:
             from .dense.maps import UNMAPPED, dense_map
 
             dense = dense_map(shapes[0], shapes[1], correspondence, progress=lambda stage: say(f"dense map: {stage}"))
+            if dense.check:
+                say(f"dense map: orientation agreement {dense.check['orientation']:.2f} (1: kept, -1: mirrored), "
+                    f"landmark distortion {dense.check['distortion']:.3f} sqrt(area)")
             left_out = int((dense.target == UNMAPPED).sum())
             if left_out:
                 print(f"darcyan: warning: {args.source}: {left_out} vertices outside the matched component "
                       f"are written with target_vertex {UNMAPPED}", file=sys.stderr)
-        if args.plot or args.html:
+        if (args.plot or args.html) and args.dense:  # the dense map: texture transfer, errors with --truth
+            from .viz.scenes import dense_scene
+
+            scene = dense_scene(shapes[0], shapes[1], dense, truth if args.truth else None)
+            _pictures(scene, args.plot, args.html, "render_dense", "dense_html")
+        elif args.plot or args.html:
             from .viz.scenes import match_scene
 
             scene = match_scene(shapes[0], shapes[1], correspondence, config=config, score=score)
@@ -359,7 +367,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "one row per source vertex, seeded by the feature matches (geodesic landmark coordinates refined by ZoomOut)")
     p.add_argument("--jobs", type=int, default=2, help="processes describing the two shapes at once when neither "
                    "is in the cache (default %(default)s)")
-    p.add_argument("--plot", metavar="FILE.png", help="also draw the matches side by side to a PNG (pip install 'darcyan[plot]')")
+    p.add_argument("--plot", metavar="FILE.png", help="also draw the matches side by side to a PNG (with --dense: the "
+                   "dense map, source coloured by position, target through the map, errors with --truth; "
+                   "pip install 'darcyan[plot]')")
     p.add_argument("--html", metavar="FILE.html", help="also write an interactive, self-contained HTML view (pip install 'darcyan[html]')")
     p.add_argument("--truth", metavar="identity|A.vts,B.vts", help="ground truth: print 'k of n matches correct' "
                    "(geodesic error <= 0.05 sqrt(area)) on stderr and mark wrong matches in the pictures; 'identity' = "

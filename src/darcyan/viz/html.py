@@ -3,7 +3,8 @@
 :func:`grid_html` shows a :class:`darcyan.viz.scenes.GridScene` (the surface around the centre, the
 level curves, the radial lines and the intersection points coloured by curvature);
 :func:`matches_html` a :class:`darcyan.viz.scenes.MatchScene` (both shapes side by side, each matched
-pair linked by a line of its colour). The page needs no network access: plotly.js is written
+pair linked by a line of its colour); :func:`dense_html` a :class:`darcyan.viz.scenes.DenseScene`
+(the source coloured by position, the target through the map, and the scored vertices by error). The page needs no network access: plotly.js is written
 into the file (about 5 MB). Shapes rotate (drag), zoom (wheel) and pan (right drag); hovering
 a point shows its vertex index (the input file's numbering), curvature and distance.
 
@@ -21,7 +22,8 @@ import numpy as np
 from ..errors import DarcyanError, require
 from ..geometry.geodesics import vertex_normals
 from ..geometry.mesh import Mesh
-from .scenes import GRID_CMAP, GridScene, MatchScene, cluster_faces, match_colours
+from .scenes import DENSE_ERROR_CMAP, DENSE_ERROR_MAX, DenseScene, GRID_CMAP, GridScene, MatchScene, cluster_faces, \
+    match_colours
 
 HTML_FACE_BUDGET = 40_000  # triangles per shape written to the page before clustering
 SURFACE_COLOUR = "#CCCCCC"
@@ -229,5 +231,48 @@ def matches_html(scene: MatchScene, path: str | os.PathLike, title: str | None =
     fig = go.Figure(traces)
     n_wrong = "" if wrong is None else f", {len(scene) - int(wrong.sum())} right by the ground truth"
     _layout(go, fig, title or f"{len(scene)} matches, {Path(src.name).name} \u2192 {Path(tgt.name).name}{n_wrong}",
+            cam.forward, cam.up)
+    return _write(fig, path)
+
+
+def dense_html(scene: DenseScene, path: str | os.PathLike, title: str | None = None) -> Path:
+    """Write an interactive view of a :class:`DenseScene` to ``path`` (self-contained HTML): the
+    source coloured by position beside the target coloured through the map; with ground truth,
+    the scored source vertices coloured by geodesic error beside them."""
+    go = _plotly()
+    cam = scene.source_camera
+    traces, offset = [], 0.0
+    panels = [("source: " + Path(scene.source_name).name, scene.source, scene.source_colours),
+              ("target (through the map): " + Path(scene.target_name).name, scene.target, scene.target_colours)]
+    shifts = []
+    for name, mesh, colours in panels:
+        right = mesh.vertices @ cam.right
+        shift = cam.right * (offset - right.min())
+        offset += (right.max() - right.min()) * (1 + SIDE_GAP)
+        ids, local = _display_faces(mesh, mesh.faces)
+        p = mesh.vertices[ids] + shift
+        rgb = [f"rgb({r},{g},{b})" for r, g, b in np.round(255 * np.clip(colours[ids], 0, 1)).astype(int)]
+        traces.append(go.Mesh3d(x=p[:, 0], y=p[:, 1], z=p[:, 2], i=local[:, 0], j=local[:, 1], k=local[:, 2],
+                                vertexcolor=rgb, flatshading=False, name=name, showlegend=True,
+                                customdata=mesh.input_index[ids],
+                                hovertemplate="vertex %{customdata}<extra>" + name + "</extra>", lighting=LIGHTING))
+        shifts.append(shift)
+    if scene.sample_errors is not None:
+        mesh = scene.source
+        right = mesh.vertices @ cam.right
+        shift = cam.right * (offset - right.min())
+        traces.append(_surface_trace(go, mesh, mesh.faces, shift, "source, scored vertices by error",
+                                     np.zeros(mesh.n_vertices), np.zeros(mesh.n_vertices)))
+        lift = LIFT_EDGES * _median_edge(mesh)
+        points = mesh.vertices[scene.sample_vertices] + lift * vertex_normals(mesh)[scene.sample_vertices] + shift
+        errors = np.minimum(scene.sample_errors, DENSE_ERROR_MAX)
+        traces.append(go.Scatter3d(
+            x=points[:, 0], y=points[:, 1], z=points[:, 2], mode="markers", name="geodesic error (\u221aarea)",
+            marker=dict(size=3, color=errors, colorscale=DENSE_ERROR_CMAP.replace("_r", ""), reversescale=True,
+                        cmin=0, cmax=DENSE_ERROR_MAX, colorbar=dict(title="error")),
+            customdata=np.column_stack([mesh.input_index[scene.sample_vertices], scene.sample_errors]),
+            hovertemplate="vertex %{customdata[0]}<br>error %{customdata[1]:.3f}<extra></extra>"))
+    fig = go.Figure(traces)
+    _layout(go, fig, title or f"dense map {Path(scene.source_name).name} \u2192 {Path(scene.target_name).name}",
             cam.forward, cam.up)
     return _write(fig, path)

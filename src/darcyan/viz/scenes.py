@@ -384,6 +384,73 @@ def match_scene(source, target, correspondence, truth: GroundTruth | None = None
                       errors, truth_points, threshold, overview_camera(views[0].mesh, views[0].points))
 
 
+@dataclass
+class DenseScene:
+    """A dense map ready to draw: texture transfer, and its errors given ground truth.
+
+    Attributes:
+        source, target: the prepared, area-1 meshes; ``source_name``, ``target_name``.
+        source_colours: ``(n1, 3)`` RGB in [0, 1], a smooth function of position on the source
+            (its coordinates along its principal axes, each scaled to [0, 1]).
+        target_colours: ``(n2, 3)`` the source's colours carried through the map: each target
+            vertex takes the colour of the source vertex whose image lies nearest to it (a seam
+            or a flip shows as a jump of colour).
+        sample_vertices: ``(s,)`` source vertices (indices of ``source``) scored against ground
+            truth, ``sample_errors (s,)`` their geodesic errors (sqrt(area)); ``None`` without.
+        threshold: a vertex is mapped right within this error.
+        check: the map's own check (:func:`darcyan.dense.maps.map_check`).
+        source_camera, target_camera: one camera per shape (their poses differ).
+    """
+
+    source: Mesh
+    target: Mesh
+    source_name: str
+    target_name: str
+    source_colours: np.ndarray
+    target_colours: np.ndarray
+    sample_vertices: np.ndarray | None
+    sample_errors: np.ndarray | None
+    threshold: float
+    check: dict
+    source_camera: Camera
+    target_camera: Camera
+
+
+def position_colours(mesh: Mesh) -> np.ndarray:
+    """``(n, 3)`` RGB in [0, 1]: the vertices' coordinates along the mesh's principal axes (widest
+    first), each scaled to [0, 1]; a smooth colouring whose every colour sits in one place."""
+    centred = mesh.vertices - mesh.vertices.mean(axis=0)
+    _, _, axes = np.linalg.svd(centred[:: max(1, len(centred) // 20000)], full_matrices=False)
+    coordinates = centred @ axes.T
+    low, high = coordinates.min(axis=0), coordinates.max(axis=0)
+    return 0.1 + 0.85 * (coordinates - low) / np.maximum(high - low, 1e-12)
+
+
+def dense_scene(source: Shape, target: Shape, dense, truth: GroundTruth | None = None,
+                threshold: float = DEFAULT_THRESHOLD) -> DenseScene:
+    """The :class:`DenseScene` of ``dense`` (a :class:`darcyan.dense.maps.DenseMap`, input
+    numbering) between prepared shapes ``source`` and ``target``; with ``truth``, scored on the
+    sample of :func:`darcyan.eval.dense_scores.evaluate_dense`."""
+    from ..dense.maps import UNMAPPED
+    from ..eval.dense_scores import evaluate_dense
+    from ..geometry.knn import nearest_rows
+
+    mesh_1, mesh_2 = source.mesh, target.mesh
+    images = target.mesh_index(np.maximum(dense.target[mesh_1.input_index], 0))
+    mapped = (dense.target[mesh_1.input_index] != UNMAPPED) & (images >= 0)
+    colours_1 = position_colours(mesh_1)
+    colours_2 = np.full((mesh_2.n_vertices, 3), 0.6)
+    if mapped.any():
+        pulled = nearest_rows(mesh_2.vertices[images[mapped]], mesh_2.vertices)  # target -> nearest image
+        colours_2 = colours_1[np.flatnonzero(mapped)[pulled]]
+    samples = errors = None
+    if truth is not None:
+        scored = evaluate_dense(mesh_1, mesh_2, dense.target, truth, target_solver=target.solver, threshold=threshold)
+        samples, errors = source.mesh_index(scored.source_vertices), scored.errors
+    return DenseScene(mesh_1, mesh_2, source.name, target.name, colours_1, colours_2, samples, errors, threshold,
+                      dict(getattr(dense, "check", {}) or {}), overview_camera(mesh_1), overview_camera(mesh_2))
+
+
 # ---------------------------------------------------------------------------------------------
 # Drawing
 
@@ -482,6 +549,27 @@ class _Surface:
         out[np.unique(query[covered])] = False
         return out
 
+    def draw_coloured(self, ax, colours: np.ndarray) -> None:
+        """Draw the surface with ``colours (n, 3)`` RGB per vertex, shaded by the head light
+        (flat per triangle, painter's order)."""
+        from matplotlib.collections import PolyCollection
+
+        faces = self.faces
+        if len(faces):
+            shade = self.intensity[faces].mean(axis=1)
+            rgb = np.clip(np.asarray(colours)[faces].mean(axis=1) * shade[:, None], 0.0, 1.0)
+            ax.add_collection(PolyCollection(self.xyz[faces][:, :, :2], facecolors=rgb, edgecolors=rgb,
+                                             linewidths=0.2, rasterized=True, zorder=1))
+        self._frame(ax)
+
+    def _frame(self, ax) -> None:
+        x0, x1, y0, y1 = self.window
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y0, y1)
+        ax.set_aspect("equal", adjustable="box")
+        ax.set_xticks([])
+        ax.set_yticks([])
+
     def draw(self, ax) -> None:
         from matplotlib.colors import LinearSegmentedColormap
         from matplotlib.tri import Triangulation
@@ -491,12 +579,7 @@ class _Surface:
             tri = Triangulation(self.xyz[:, 0], self.xyz[:, 1], self.faces)
             ax.tripcolor(tri, self.intensity, shading="gouraud", cmap=grey, vmin=0.0, vmax=1.0,
                          rasterized=True, zorder=1)
-        x0, x1, y0, y1 = self.window
-        ax.set_xlim(x0, x1)
-        ax.set_ylim(y0, y1)
-        ax.set_aspect("equal", adjustable="box")
-        ax.set_xticks([])
-        ax.set_yticks([])
+        self._frame(ax)
 
 
 def _window(xy: np.ndarray, margin: float, aspect: float = 1.0) -> tuple:
@@ -705,6 +788,67 @@ def render_matches(scene: MatchScene, path: str | os.PathLike, title: str | None
     lax.text(0.5, 0.0, note, ha="center", va="bottom", fontsize=7, color="#333333", transform=lax.transAxes)
     fig.suptitle(title or f"{k} matched feature points, {Path(scene.source.name).name} \u2192 "
                           f"{Path(scene.target.name).name}", fontsize=11, y=0.985)
+    boxes = _panel_boxes(fig, axes)
+    out = _save(fig, path)
+    return Picture(out, time.perf_counter() - start, boxes)
+
+
+DENSE_SIZE = (12.0, 5.4)  # inches, three panels
+DENSE_ERROR_CMAP = "magma_r"
+DENSE_ERROR_MAX = 0.25  # errors at or above this take the darkest colour (sqrt(area))
+
+
+def render_dense(scene: DenseScene, path: str | os.PathLike, title: str | None = None) -> Picture:
+    """Draw a :class:`DenseScene` to a PNG: the source coloured by position, the target coloured
+    through the map, and with ground truth a third panel: the source with each scored vertex
+    coloured by its geodesic error."""
+    start = time.perf_counter()
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+    fig = _figure(DENSE_SIZE, MATCH_DPI)
+    panels = 3 if scene.sample_errors is not None else 2
+    width = 0.96 / panels
+    axes = {}
+    for i, name in enumerate(["source", "target", "errors"][:panels]):
+        axes[name] = fig.add_axes((0.02 + i * width, 0.17, width - 0.01, 0.68))
+    pixels = (width - 0.01) * DENSE_SIZE[0] * MATCH_DPI
+    aspect = (width - 0.01) * DENSE_SIZE[0] / (0.68 * DENSE_SIZE[1])
+    for name, mesh, camera, colours in (("source", scene.source, scene.source_camera, scene.source_colours),
+                                        ("target", scene.target, scene.target_camera, scene.target_colours)):
+        surface = _Surface(mesh, camera, _window(camera.project(mesh.vertices)[:, :2], 1.05, aspect), pixels)
+        surface.draw_coloured(axes[name], colours)
+    axes["source"].set_title(f"source: {Path(scene.source_name).name}\ncoloured by position", fontsize=9)
+    axes["target"].set_title(f"target: {Path(scene.target_name).name}\ncoloured through the map", fontsize=9)
+    if scene.sample_errors is not None:
+        ax = axes["errors"]
+        mesh, camera = scene.source, scene.source_camera
+        surface = _Surface(mesh, camera, _window(camera.project(mesh.vertices)[:, :2], 1.05, aspect), pixels)
+        surface.draw(ax)
+        points = mesh.vertices[scene.sample_vertices]
+        seen = surface.visible(points)
+        xy = camera.project(points[seen])
+        errors = np.minimum(scene.sample_errors[seen], DENSE_ERROR_MAX)
+        norm = Normalize(0.0, DENSE_ERROR_MAX)
+        order = np.argsort(errors)  # the largest errors drawn last, on top
+        ax.scatter(xy[order, 0], xy[order, 1], c=errors[order], cmap=DENSE_ERROR_CMAP, norm=norm, s=9,
+                   linewidths=0, zorder=5)
+        finite = scene.sample_errors[np.isfinite(scene.sample_errors)]
+        rate = float((scene.sample_errors <= scene.threshold).mean())
+        ax.set_title(f"geodesic error of {len(scene.sample_errors)} scored source vertices\n{rate:.1%} within "
+                     f"{scene.threshold:g}, mean {finite.mean():.3f}", fontsize=9)
+        cax = fig.add_axes((0.02 + 2 * width + 0.03, 0.1, width - 0.07, 0.022))
+        bar = fig.colorbar(ScalarMappable(norm=norm, cmap=DENSE_ERROR_CMAP), cax=cax, orientation="horizontal")
+        bar.ax.tick_params(labelsize=7)
+        bar.set_label("error (\u221aarea); darkest: 0.25 or more", fontsize=7)
+    check = scene.check
+    note = "a seam or a flip shows as a jump of colour between the first two panels"
+    if "orientation" in check:
+        note += (f"\nthe map's own check: orientation agreement {check['orientation']:.2f} "
+                 f"(1: kept, -1: mirrored), landmark distortion {check['distortion']:.3f} \u221aarea")
+    fig.text(0.02, 0.015, note, ha="left", fontsize=7.5, color="#333333")
+    fig.suptitle(title or f"dense map {Path(scene.source_name).name} \u2192 {Path(scene.target_name).name}",
+                 fontsize=11, y=0.97)
     boxes = _panel_boxes(fig, axes)
     out = _save(fig, path)
     return Picture(out, time.perf_counter() - start, boxes)
