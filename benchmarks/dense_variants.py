@@ -63,6 +63,22 @@ def score_pair(task: tuple) -> dict:
                       "seconds": seconds[name], "check": checks[name]} for name in variants}}
 
 
+def read_variants(text: str) -> dict:
+    """name -> DenseConfig changes, each checked by building its DenseConfig."""
+    try:
+        variants = json.loads(text)
+    except ValueError as exc:
+        raise DarcyanError(f"variants: not JSON ({exc})") from None
+    if not isinstance(variants, dict) or not all(isinstance(v, dict) for v in variants.values()):
+        raise DarcyanError('variants: a JSON object of name -> {field: value}, e.g. {"default": {}}')
+    for name, changes in variants.items():
+        try:
+            DenseConfig(**changes)
+        except TypeError as exc:  # an unknown field
+            raise DarcyanError(f"variant {name!r}: {exc}") from None
+    return variants
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("dataset")
@@ -71,8 +87,15 @@ def main(argv=None) -> int:
     parser.add_argument("variants", help="JSON: name -> DenseConfig fields to change")
     parser.add_argument("--out", type=Path)
     args = parser.parse_args(argv)
-    variants = json.loads(args.variants)
-    lines = [line.split("\t") for line in args.pairs.read_text().splitlines() if line.strip() and not line.startswith("#")]
+    try:
+        variants = read_variants(args.variants)
+        lines = [line.split("\t") for line in args.pairs.read_text().splitlines()
+                 if line.strip() and not line.startswith("#")]
+        if not (DATA / args.dataset).is_dir():
+            raise DarcyanError(f"{DATA / args.dataset}: no such dataset folder (set DARCYAN_DATA)")
+    except (OSError, DarcyanError) as exc:  # one line, no traceback (OSError names its file)
+        print(f"dense_variants.py: error: {exc}", file=sys.stderr)
+        return 2
     if args.count < len(lines):
         lines = [lines[i] for i in sorted(np.random.default_rng(0).choice(len(lines), args.count, replace=False))]
     tasks = [(args.dataset, line[0].strip(), line[1].strip(), line[2].strip() if len(line) > 2 else args.dataset,

@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from darcyan import DarcyanConfig, load_mesh
-from darcyan.errors import DarcyanError
+from darcyan.errors import ConfigError, DarcyanError
 from darcyan.eval.metrics import GroundTruth, nearest_samples, read_vts, score_matches
 from darcyan.eval.partial import PartialMesh, cut_ball, cut_plane, partial_truth, rim_distance
 from darcyan.geometry.geodesics import GeodesicSolver
@@ -198,9 +198,34 @@ def main(argv=None) -> int:
     parser.add_argument("--config", type=Path, help="a JSON file of settings, as darcyan's --config "
                         '(e.g. {"rims": {"min_length": 0}}: without the cut-rim rule)')
     args = parser.parse_args(argv)
-    config = DarcyanConfig()
-    if args.config:
-        config = config.updated(json.loads(args.config.read_text()), str(args.config))
+    try:
+        return run(args)
+    except (OSError, DarcyanError) as exc:  # one line, no traceback (OSError names its file)
+        print(f"partial.py: error: {exc}", file=sys.stderr)
+        return 2
+
+
+def read_settings(path: Path | None) -> DarcyanConfig:
+    """darcyan's defaults, changed by the JSON file ``path`` (as ``darcyan --config``)."""
+    if path is None:
+        return DarcyanConfig()
+    try:
+        changes = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise DarcyanError(f"{path}: cannot read settings ({exc})") from None
+    if not isinstance(changes, dict):
+        raise DarcyanError(f"{path}: settings must be a JSON object")
+    try:
+        return DarcyanConfig().updated(changes, str(path))
+    except ConfigError as exc:
+        raise DarcyanError(f"{path}: {exc}") from None
+
+
+def run(args) -> int:
+    config = read_settings(args.config)
+    for name in args.datasets:
+        if not (DATA / name / "test_pairs.txt").is_file():
+            raise DarcyanError(f"{DATA / name}: no test_pairs.txt (set DARCYAN_DATA to the folder holding {name})")
     args.out.mkdir(parents=True, exist_ok=True)
     journal = args.out / "cases.jsonl"
     digest = code_digest()

@@ -61,6 +61,22 @@ def tosca() -> Path:
 
 
 @pytest.fixture(scope="session")
+def faust(tosca) -> Path:
+    """``faust-5k`` beside the TOSCA data (skips when it is not there)."""
+    folder = tosca / "faust-5k"
+    if not folder.is_dir():
+        pytest.skip(f"faust-5k not found at {folder}")
+    return folder
+
+
+def vts_truth(folder: Path, source: str, target: str):
+    """The ``.vts`` ground truth from shape ``source`` to ``target`` of a dataset ``folder``."""
+    from darcyan.eval.metrics import GroundTruth, read_vts
+
+    return GroundTruth(read_vts(folder / "corres" / f"{source}.vts"), read_vts(folder / "corres" / f"{target}.vts"))
+
+
+@pytest.fixture(scope="session")
 def sphere():
     return synthetic.icosphere(subdivisions=5, radius=2.0)  # 10,242 vertices
 

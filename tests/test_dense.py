@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 import pytest
+from conftest import vts_truth
 
 from darcyan import DarcyanConfig
 from darcyan.cli import main
@@ -260,22 +261,18 @@ def test_orientation_coordinates_flip_in_a_mirror_and_stay_under_rigid_motion(fi
 
 
 @pytest.mark.slow
-def test_a_person_front_and_back_are_not_swapped(tosca):
+def test_a_person_front_and_back_are_not_swapped(faust):
     # FAUST person 2, poses 3 -> 8: with distances to the five landmarks alone the dense map put
     # the front of the body on its back over a third of it (0.42 of the vertices within 0.05,
     # orientation check -0.5); the turns between landmarks hold it (0.97, check > 0.8).
-    from darcyan.eval.metrics import read_vts
     from darcyan.method.pipeline import describe_shape, load_shape
 
-    folder = tosca / "faust-5k"
-    if not folder.is_dir():
-        pytest.skip("faust-5k not found")
     config = DarcyanConfig()
-    files = folder / "tr_reg_023.off", folder / "tr_reg_028.off"
+    files = faust / "tr_reg_023.off", faust / "tr_reg_028.off"
     descriptions = [describe_shape(f, config) for f in files]
     shapes = [load_shape(f, config, warn=False) for f in files]
     correspondence = match_shapes(*descriptions, config)
-    truth = GroundTruth(*(read_vts(folder / "corres" / f"{f.stem}.vts") for f in files))
+    truth = vts_truth(faust, "tr_reg_023", "tr_reg_028")
     maps = {"turns": dense_map(*shapes, correspondence),
             "distances only": dense_map(*shapes, correspondence, DenseConfig(orientation_weight=0, landmark_weight=0))}
     scores = {name: evaluate_dense(shapes[0].mesh, shapes[1].mesh, m.target, truth, target_solver=shapes[1].solver)

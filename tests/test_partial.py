@@ -5,10 +5,11 @@ import warnings
 
 import numpy as np
 import pytest
+from conftest import vts_truth
 
 from darcyan import DarcyanConfig, load_mesh
 from darcyan.errors import ConfigError
-from darcyan.eval.metrics import GroundTruth, read_vts, score_matches
+from darcyan.eval.metrics import GroundTruth, score_matches
 from darcyan.eval.partial import cut_ball, cut_plane, partial_truth, remove_vertices, rim_distance
 from darcyan.geometry import synthetic
 from darcyan.geometry.geodesics import GeodesicSolver
@@ -108,16 +109,12 @@ def test_a_cut_limb_leaves_no_extremity_at_its_rim_and_stays_unmatched(figure_po
 
 
 @pytest.mark.slow
-def test_a_person_without_a_hand_matches_the_rest_to_the_whole_person(tosca):
-    folder = tosca / "faust-5k"
-    if not folder.is_dir():
-        pytest.skip("faust-5k not found")
+def test_a_person_without_a_hand_matches_the_rest_to_the_whole_person(faust):
     config = DarcyanConfig()
-    source, target = folder / "tr_reg_000.off", folder / "tr_reg_001.off"
-    full = load_mesh(source)
+    full = load_mesh(faust / "tr_reg_000.off")
     whole_source = analyze_mesh(full, config)
-    whole_target = analyze_mesh(load_mesh(target), config)
-    truth = GroundTruth(read_vts(folder / "corres" / "tr_reg_000.vts"), read_vts(folder / "corres" / "tr_reg_001.vts"))
+    whole_target = analyze_mesh(load_mesh(faust / "tr_reg_001.off"), config)
+    truth = vts_truth(faust, "tr_reg_000", "tr_reg_001")
     # cut away, one at a time, the extremity at each feature point
     for tip in whole_source.description.feature_vertices[:3]:
         partial = cut_ball(full, int(tip), 0.12)

@@ -361,10 +361,11 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: only {len(src)} consistent landmark match(es), "
                            f"a dense map needs at least {MIN_LANDMARKS}")
     turns_1, turns_2 = orientation_coordinates(shape_1, fields_1), orientation_coordinates(shape_2, fields_2)
-    distances_1, distances_2 = fields_1, fields_2
+    # Landmark coordinates: the distances, and their turns unless weighed 0.
+    coords_1, coords_2 = fields_1, fields_2
     if config.orientation_weight > 0:
-        fields_1 = np.hstack([fields_1, config.orientation_weight * turns_1])
-        fields_2 = np.hstack([fields_2, config.orientation_weight * turns_2])
+        coords_1 = np.hstack([fields_1, config.orientation_weight * turns_1])
+        coords_2 = np.hstack([fields_2, config.orientation_weight * turns_2])
     if config.method == "pyfm":
         timings["landmarks"] = time.perf_counter() - t
         t = time.perf_counter()
@@ -372,8 +373,8 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         local = pyfm_point_map(shape_1.mesh, shape_2.mesh, DENSE_PIPELINE, src, tgt)
         timings["pyfm"] = time.perf_counter() - t
     else:
-        map_12 = nearest_rows(fields_2, fields_1)  # (n1,) first maps by geodesic landmark coordinates
-        map_21 = nearest_rows(fields_1, fields_2)  # (n2,)
+        map_12 = nearest_rows(coords_2, coords_1)  # (n1,) first maps by the landmark coordinates
+        map_21 = nearest_rows(coords_1, coords_2)  # (n2,)
         timings["landmarks"] = time.perf_counter() - t
         t = time.perf_counter()
         say("basis")
@@ -393,16 +394,16 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             sample_1, sample_2 = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
             sub_12, sub_21 = map_12, map_21
         c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], sub_12, sub_21, config,
-                             fields_1[sample_1], fields_2[sample_2])
+                             coords_1[sample_1], coords_2[sample_2])
         k = len(c_12)
-        q, r = _embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config, fields_1, fields_2)
+        q, r = _embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config, coords_1, coords_2)
         local = nearest_rows(r, q)
         timings["zoomout"] = time.perf_counter() - t
     target = np.full(shape_1.n_input_vertices, UNMAPPED, dtype=np.int64)
     on_mesh = shape_1.mesh_index(np.arange(shape_1.n_input_vertices))  # welded copies included
     target[on_mesh >= 0] = shape_2.mesh.input_index[local[on_mesh[on_mesh >= 0]]]
     landmarks = np.stack([shape_1.mesh.input_index[src], shape_2.mesh.input_index[tgt]], axis=1)
-    check = map_check(shape_1, local, distances_1, distances_2, turns_1, turns_2)
+    check = map_check(shape_1, local, fields_1, fields_2, turns_1, turns_2)
     return DenseMap(target, landmarks, timings, check)
 
 

@@ -22,8 +22,16 @@ import numpy as np
 from ..errors import DarcyanError, require
 from ..geometry.geodesics import vertex_normals
 from ..geometry.mesh import Mesh
-from .scenes import DENSE_ERROR_CMAP, DENSE_ERROR_MAX, DenseScene, GRID_CMAP, GridScene, MatchScene, cluster_faces, \
-    match_colours
+from .scenes import (
+    DENSE_ERROR_CMAP,
+    DENSE_ERROR_MAX,
+    GRID_CMAP,
+    DenseScene,
+    GridScene,
+    MatchScene,
+    cluster_faces,
+    match_colours,
+)
 
 HTML_FACE_BUDGET = 40_000  # triangles per shape written to the page before clustering
 SURFACE_COLOUR = "#CCCCCC"

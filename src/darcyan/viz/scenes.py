@@ -133,12 +133,18 @@ def facing_camera(mesh: Mesh, vertex: int, distance: np.ndarray, radius: float) 
     return Camera.looking_along(-n)
 
 
+def principal_axes(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """``(centred (n, 3), axes (3, 3))``: the vertices about their mean, and the mesh's principal
+    axes as rows, widest first (from at most about 20,000 vertices)."""
+    centred = mesh.vertices - mesh.vertices.mean(axis=0)
+    _, _, axes = np.linalg.svd(centred[:: max(1, len(centred) // 20000)], full_matrices=False)
+    return centred, axes
+
+
 def overview_camera(mesh: Mesh, points: np.ndarray | None = None) -> Camera:
     """A camera along the shape's thinnest principal axis (its widest silhouette), from the side
     where most of ``points`` (vertex indices, e.g. matched points) face the viewer."""
-    centred = mesh.vertices - mesh.vertices.mean(axis=0)
-    _, _, axes = np.linalg.svd(centred[:: max(1, len(centred) // 20000)], full_matrices=False)
-    forward = axes[2]
+    forward = principal_axes(mesh)[1][2]
     if points is not None and len(points):
         facing = (vertex_normals(mesh)[np.asarray(points)] @ forward < 0).sum()
         if facing < len(points) - facing:
@@ -419,8 +425,7 @@ class DenseScene:
 def position_colours(mesh: Mesh) -> np.ndarray:
     """``(n, 3)`` RGB in [0, 1]: the vertices' coordinates along the mesh's principal axes (widest
     first), each scaled to [0, 1]; a smooth colouring whose every colour sits in one place."""
-    centred = mesh.vertices - mesh.vertices.mean(axis=0)
-    _, _, axes = np.linalg.svd(centred[:: max(1, len(centred) // 20000)], full_matrices=False)
+    centred, axes = principal_axes(mesh)
     coordinates = centred @ axes.T
     low, high = coordinates.min(axis=0), coordinates.max(axis=0)
     return 0.1 + 0.85 * (coordinates - low) / np.maximum(high - low, 1e-12)
