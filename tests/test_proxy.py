@@ -64,3 +64,21 @@ def test_feature_points_found_with_a_proxy_repeat_across_poses(tosca, tmp_path):
     overall = result.results["methods"]["darcyan"]["overall"]
     assert overall["pairs"] == 12
     assert overall["repeatability"] >= 0.85, overall
+
+
+def test_smooth_basis_on_a_proxy_spans_the_sphere_harmonics(sphere):
+    # On a sphere the first non-constant eigenfunctions are x, y and z: the basis computed on
+    # the proxy and interpolated must lie in their span, like the one computed on the mesh.
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(sphere)
+    coordinates = np.hstack([np.ones((shape.mesh.n_vertices, 1)), shape.mesh.vertices])
+    for proxy_vertices in (0, 1000):
+        basis = shape.smooth_basis(4, proxy_vertices)
+        assert basis.shape == (shape.mesh.n_vertices, 4)
+        fitted = coordinates @ np.linalg.lstsq(coordinates, basis, rcond=None)[0]
+        assert np.linalg.norm(fitted - basis) <= 0.01 * np.linalg.norm(basis)
+    # the 5th to 9th (degree-2 harmonics) are not in that span: the check can fail
+    fifth = shape.smooth_basis(9, 1000)[:, 4:]
+    fitted = coordinates @ np.linalg.lstsq(coordinates, fifth, rcond=None)[0]
+    assert np.linalg.norm(fitted - fifth) > 0.5 * np.linalg.norm(fifth)

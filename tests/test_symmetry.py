@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from conftest import correct_matches, random_rotation
 
-from darcyan import DarcyanConfig, analyze_mesh, match_shapes
+from darcyan import DarcyanConfig, analyze_mesh
 from darcyan.geometry.mesh import Mesh
 from darcyan.method.symmetry import handedness, orientation_agreement
 

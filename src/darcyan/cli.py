@@ -154,8 +154,12 @@ def cmd_match(args: argparse.Namespace) -> int:
 
             dense = dense_map(shapes[0], shapes[1], correspondence, progress=lambda stage: say(f"dense map: {stage}"))
             if dense.check:
-                say(f"dense map: orientation agreement {dense.check['orientation']:.2f} (1: kept, -1: mirrored), "
-                    f"landmark distortion {dense.check['distortion']:.3f} sqrt(area)")
+                check = dense.check
+                seed = ("the sparse matches" if check["seed"] == 0 else
+                        f"alternative matching {check['seed']} (its map keeps the curvature signature better)")
+                say(f"dense map: seeded by {seed}; orientation agreement {check['orientation']:.2f} (1: kept, "
+                    f"-1: mirrored), landmark distortion {check['distortion']:.3f} sqrt(area); "
+                    + ("trusted" if check["trusted"] else "NOT trusted: check the map (--plot)"))
             left_out = int((dense.target == UNMAPPED).sum())
             if left_out:
                 print(f"darcyan: warning: {args.source}: {left_out} vertices outside the matched component "

@@ -547,6 +547,7 @@ def _dense_records(job: dict, target: Shape) -> list:
                 start = time.perf_counter()  # the dense stage only
                 result = dense_map(source, target, correspondence, DenseConfig())
                 info["landmarks"] = len(result.landmarks)
+                info["check"] = result.check
             else:
                 result = pyfm_own_map(source.mesh, target.mesh, source.n_input_vertices)
             maps[method] = result.target
@@ -947,7 +948,8 @@ def summarize_dense(records: list) -> dict:
     Per class, group and overall: ``pairs``, ``failed`` (pairs without a map), ``samples``,
     ``within``, ``rate`` (within / samples, pooled), ``mean_error`` (over the mapped samples),
     ``curve`` (pooled cumulative curve over ``CURVE_TAUS``), ``seconds`` (sum of the dense
-    stages) and ``seconds_per_pair``; overall also ``rate_class_mean``.
+    stages), ``seconds_per_pair`` and ``untrusted`` (maps whose own check doubts them); overall
+    also ``rate_class_mean``.
     """
     out = {}
     for method, rows in _by_method(records, DENSE_METHODS).items():
@@ -966,7 +968,8 @@ def _pool_dense(rows: list) -> dict:
     error_sum = sum(r["mean_error"] * r["mapped"] for r in rows if r["mapped"])
     curve = sum(np.asarray(r["curve"]) * r["samples"] for r in rows) / samples if samples else np.zeros(len(CURVE_TAUS))
     seconds = float(sum(r["seconds"] for r in rows))
-    return {"pairs": len(rows), "failed": sum(1 for r in rows if r.get("failed")), "samples": samples,
+    return {"pairs": len(rows), "failed": sum(1 for r in rows if r.get("failed")),
+            "untrusted": sum(1 for r in rows if (r.get("check") or {}).get("trusted") is False), "samples": samples,
             "within": within, "rate": within / samples if samples else None,
             "mean_error": error_sum / mapped if mapped else None, "curve": np.asarray(curve).tolist(),
             "seconds": seconds, "seconds_per_pair": seconds / len(rows) if rows else None}
@@ -1134,8 +1137,9 @@ def _dense_report(results: dict) -> list:
     chosen = (results.get("settings") or {}).get("dense") or {}
     lines = ["", f"## Dense maps: within {results['threshold']} / mean error / seconds per pair", ""]
     lines.append(f"{chosen.get('samples', '?')} source vertices per pair (seed {chosen.get('seed', '?')}). "
-                 "darcyan: the dense map seeded by darcyan's sparse matches (geodesic landmark coordinates "
-                 "refined by ZoomOut); pyfm: pyFM's own pipeline (WKS, 50 x 50 functional map, ZoomOut to "
+                 "darcyan: the dense map seeded by darcyan's sparse matches, or by the alternative matching "
+                 "whose first map keeps the curvature signature best (geodesic landmark coordinates "
+                 "refined by ZoomOut; 'not trusted': the map's own check doubts it); pyfm: pyFM's own pipeline (WKS, 50 x 50 functional map, ZoomOut to "
                  "200) without darcyan's landmarks. " + results.get("dense_definition", DENSE_DEFINITION))
     if not dense:
         return lines + ["", "No dense results yet."]
@@ -1146,7 +1150,8 @@ def _dense_report(results: dict) -> list:
         if c is None:
             return ""
         failed = f" ({c['failed']} failed)" if c["failed"] else ""
-        return f"{_pct(c['rate'])} / {_fmt(c['mean_error'])} / {c['seconds_per_pair']:.1f} s{failed}"
+        untrusted = f" ({c['untrusted']} not trusted)" if c.get("untrusted") else ""
+        return f"{_pct(c['rate'])} / {_fmt(c['mean_error'])} / {c['seconds_per_pair']:.1f} s{failed}{untrusted}"
 
     for cls in sorted({c for m in dense.values() for c in m["classes"]}):
         lines.append(f"| {cls} | " + " | ".join(cell(dense[m]["classes"].get(cls)) for m in methods) + " |")

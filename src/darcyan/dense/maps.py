@@ -26,13 +26,14 @@ source vertices with the standard geodesic error (see :mod:`darcyan.eval.metrics
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import ConfigError, DarcyanError
-from ..geometry.knn import nearest_rows
+from ..geometry.knn import nearest_rows, nearest_rows_near
 from ..geometry.mesh import Mesh
 from ..geometry.sampling import sample_vertices
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
@@ -79,6 +80,28 @@ class DenseConfig:
             distances to the landmarks in the first map and in the landmark term (0: distances
             only). Distances to five extremities of a human cannot tell its front from its back:
             on FAUST, maps without them were flipped over a third of the body in 12 of 40 pairs.
+        basis_tolerance: relative accuracy of the eigenvalues asked of the eigensolver (its
+            start vector is seeded); at 1e-3 the eigenvectors of FAUST shapes equal those at
+            machine precision to 1e-14, in half the time.
+        basis_proxy_vertices: the basis of a mesh with more than twice this many vertices is
+            computed on a decimated copy of about this many and interpolated
+            (:meth:`darcyan.geometry.shape.Shape.smooth_basis`); 0: always on the mesh itself.
+        candidates: the sparse matching and its first ``candidates - 1`` alternatives
+            (``Correspondence.alternatives``) are each turned into a first map; the one whose
+            map best keeps the :func:`point_signature` seeds the dense map (1: the sparse
+            matching alone). A seed of mirrored landmarks otherwise ruins a whole map.
+        seed_basis, seed_samples: size of the short ZoomOut that scores each seed, and the
+            samples it runs on.
+        signature_lengths: diffusion lengths (sqrt(area)) of the mean curvature in that signature.
+        trust_orientation, trust_margin: a map is ``trusted`` (``DenseMap.check``) when its
+            orientation agreement is at least ``trust_orientation`` and its seed's signature
+            score beats the runner-up's by at least ``trust_margin`` (relative).
+        local_search_above: a target mesh with more vertices than this is searched coarse to
+            fine for the final map (:func:`darcyan.geometry.knn.nearest_rows_near`: near the
+            image's nearest ZoomOut sample) instead of over all its vertices: O(V) instead of
+            O(V^2) work.
+        local_search_reach: the coarse-to-fine search looks at the cells of this many samples
+            around the nearest one.
         seed: seed of the surface samples.
     """
 
@@ -89,11 +112,21 @@ class DenseConfig:
     basis_start: int = 10
     basis_size: int = 100
     basis_step: int = 4
-    zoomout_samples: int = 3000
+    zoomout_samples: int = 2000
     bijectivity: float = 1.0
     orthogonality: float = 1.0
     landmark_weight: float = 3.0
     orientation_weight: float = 1.0
+    basis_proxy_vertices: int = 6000
+    basis_tolerance: float = 1e-3
+    candidates: int = 4
+    seed_basis: int = 30
+    seed_samples: int = 1000
+    signature_lengths: tuple = (0.02, 0.05, 0.1)
+    trust_orientation: float = 0.3
+    trust_margin: float = 0.02
+    local_search_above: int = 20000
+    local_search_reach: int = 16
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -101,16 +134,26 @@ class DenseConfig:
             raise ConfigError(f"dense: method must be one of {METHODS}, got {self.method!r}")
         if self.landmarks not in LANDMARK_MODES:
             raise ConfigError(f"dense: landmarks must be one of {LANDMARK_MODES}, got {self.landmarks!r}")
-        for name in ("basis_start", "basis_size", "basis_step"):
+        for name in ("basis_start", "basis_size", "basis_step", "local_search_reach", "candidates", "seed_basis",
+                     "seed_samples"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
                 raise ConfigError(f"dense: {name} must be a positive integer, got {value!r}")
         if self.basis_start > self.basis_size:
             raise ConfigError(f"dense: basis_start ({self.basis_start}) exceeds basis_size ({self.basis_size})")
-        if not isinstance(self.zoomout_samples, int) or self.zoomout_samples < 0:
-            raise ConfigError(f"dense: zoomout_samples must be a non-negative integer, got {self.zoomout_samples!r}")
+        for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < 0:
+                raise ConfigError(f"dense: {name} must be a non-negative integer, got {value!r}")
+        lengths = self.signature_lengths
+        if (not isinstance(lengths, (list, tuple)) or not lengths
+                or not all(isinstance(x, (int, float)) and x > 0 for x in lengths)):
+            raise ConfigError(f"dense: signature_lengths must be a list of positive lengths, got {lengths!r}")
+        object.__setattr__(self, "signature_lengths", tuple(float(x) for x in lengths))
+        if not (isinstance(self.trust_orientation, (int, float)) and -1 <= self.trust_orientation <= 1):
+            raise ConfigError(f"dense: trust_orientation must be in [-1, 1], got {self.trust_orientation!r}")
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
-                     "orientation_weight"):
+                     "orientation_weight", "trust_margin", "basis_tolerance"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value >= 0):
                 raise ConfigError(f"dense: {name} must be non-negative, got {value!r}")
@@ -125,7 +168,10 @@ class DenseMap:
             numbering), :data:`UNMAPPED` for source vertices outside the analysed mesh.
         landmarks: ``(k, 2) int64`` (source, target) landmark pairs used, input numbering.
         timings: seconds per stage.
-        check: what :func:`map_check` says of the map (``orientation`` in [-1, 1], ``distortion``).
+        check: what :func:`map_check` says of the map (``orientation`` in [-1, 1], ``distortion``),
+            which seed was used (``seed``: 0 the sparse matching, i its i-th alternative, of
+            ``seeds`` usable ones), its ``signature`` score and the ``runner_up``'s, and whether
+            the map is ``trusted`` (see :class:`DenseConfig`).
     """
 
     target: np.ndarray
@@ -198,24 +244,33 @@ def _surface_sample(shape, config: DenseConfig) -> np.ndarray:
                                    shape.vertex_areas))
 
 
-def _basis(shape, size: int) -> np.ndarray:
-    """``(n, size)`` the shape's Laplace-Beltrami eigenvectors (built once per shape)."""
-    return shape.spectrum(min(size, shape.mesh.n_vertices - 1), shift=EIGSH_SHIFT).vectors
+def _basis(shape, config: DenseConfig) -> np.ndarray:
+    """``(n, basis_size)`` the shape's Laplace-Beltrami eigenvectors (built once per shape; on
+    the coarse proxy of a large mesh, see ``DenseConfig.basis_proxy_vertices``)."""
+    return shape.smooth_basis(min(config.basis_size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
+                              tol=config.basis_tolerance, shift=EIGSH_SHIFT)
 
 
 # ----------------------------------------------------------------------------------------------
 # The dense map
 
 
-def _landmark_pairs(shape_1, shape_2, correspondence, config: DenseConfig):
-    """Landmark pairs in local numbering and their distance fields ``(n, k)`` on both shapes."""
+def _landmark_pairs(shape_1, shape_2, correspondence, config: DenseConfig, fields: tuple = ({}, {})):
+    """Landmark pairs in local numbering and their distance fields ``(n, k)`` on both shapes
+    (``fields``: one ``{vertex: (n,) distance}`` per shape, read and filled in)."""
     src = shape_1.mesh_index(correspondence.source_vertex)
     tgt = shape_2.mesh_index(correspondence.target_vertex)
     cost = np.asarray(getattr(correspondence, "distance", np.zeros(len(src))), dtype=np.float64)
     ok = (src >= 0) & (tgt >= 0)
     src, tgt, cost = src[ok], tgt[ok], cost[ok]
-    fields_1 = np.stack([shape_1.solver.distance(int(v)) for v in src], axis=1) if len(src) else np.zeros((shape_1.mesh.n_vertices, 0))
-    fields_2 = np.stack([shape_2.solver.distance(int(v)) for v in tgt], axis=1) if len(tgt) else np.zeros((shape_2.mesh.n_vertices, 0))
+
+    def distances(shape, known, vertices):
+        for v in vertices:
+            if int(v) not in known:
+                known[int(v)] = shape.solver.distance(int(v))
+        return np.stack([known[int(v)] for v in vertices], axis=1) if len(vertices) else np.zeros((shape.mesh.n_vertices, 0))
+
+    fields_1, fields_2 = distances(shape_1, fields[0], src), distances(shape_2, fields[1], tgt)
     if config.landmarks == "consistent" and len(src):
         finite = np.where(np.isfinite(cost), cost, 0.0)
         scale = finite.max() if finite.max() > 0 else 1.0
@@ -237,7 +292,7 @@ def orientation_coordinates(shape, fields: np.ndarray) -> np.ndarray:
     mesh = shape.mesh
     k = fields.shape[1]
     a, b = np.triu_indices(k, k=1)
-    grads = face_gradients(mesh, fields)  # (m, 3, k)
+    grads = face_gradients(mesh, fields, getattr(shape, "gradient", None))  # (m, 3, k)
     v, f = mesh.vertices, mesh.faces
     normal = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
     area = np.linalg.norm(normal, axis=1)
@@ -245,17 +300,29 @@ def orientation_coordinates(shape, fields: np.ndarray) -> np.ndarray:
     norm = np.linalg.norm(grads, axis=1)  # (m, k)
     cross = np.cross(grads[:, :, a], grads[:, :, b], axis=1)  # (m, 3, pairs)
     sine = np.einsum("mi,mip->mp", unit, cross) / np.maximum(norm[:, a] * norm[:, b], 1e-12)
-    weight = np.zeros(mesh.n_vertices)
-    out = np.zeros((mesh.n_vertices, len(a)))
-    for corner in range(3):
-        np.add.at(out, f[:, corner], sine * area[:, None])
-        np.add.at(weight, f[:, corner], area)
-    return out / np.maximum(weight, 1e-300)[:, None]
+    import scipy.sparse as sp
+
+    # (n, m) face areas at the faces' corners: one product sums them per vertex.
+    corners = sp.csr_matrix((np.repeat(area, 3), (f.ravel(), np.repeat(np.arange(len(f)), 3))),
+                            shape=(mesh.n_vertices, len(f)))
+    weight = np.asarray(corners.sum(axis=1)).ravel()
+    return (corners @ sine) / np.maximum(weight, 1e-300)[:, None]
 
 
-def _fit_map(basis_from: np.ndarray, basis_to_mapped: np.ndarray) -> np.ndarray:
-    """``(k, k)`` least-squares ``C`` with ``basis_from @ C ~ basis_to_mapped`` (both ``(s, k)``)."""
-    return np.linalg.lstsq(basis_from, basis_to_mapped, rcond=None)[0]
+class _Fitter:
+    """Least-squares functional maps on the leading columns of one basis ``(s, K)``: its QR
+    factorization once, whose leading k columns factor the first k basis columns (and the
+    leading block of R's inverse inverts theirs), so that each ZoomOut step's fit
+    ``basis[:, :k] @ C ~ Y`` is two small products, not a new least squares."""
+
+    def __init__(self, basis: np.ndarray):
+        self.q, r = np.linalg.qr(basis)
+        self.r_inverse = np.linalg.inv(r)
+
+    def fit(self, mapped: np.ndarray) -> np.ndarray:
+        """``(k, k)`` ``C`` with ``basis[:, :k] @ C ~ mapped`` (``mapped (s, k)``)."""
+        k = mapped.shape[1]
+        return self.r_inverse[:k, :k] @ (self.q[:, :k].T @ mapped)
 
 
 def _embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.ndarray,
@@ -269,12 +336,16 @@ def _embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.nda
     ``b_b[j] C_ba ~ b_a[i]``; orthogonality (``C_ab C_ab^T ~ I``): ``b_b[j] C_ab^T ~ b_a[i]``.
     """
     queries, references = [b_a @ c_ab], [b_b]
-    if config.bijectivity > 0:
-        queries.append(config.bijectivity * b_a)
-        references.append(config.bijectivity * (b_b @ c_ba))
-    if config.orthogonality > 0:
-        queries.append(config.orthogonality * b_a)
-        references.append(config.orthogonality * (b_b @ c_ab.T))
+    w1, w2 = config.bijectivity ** 2, config.orthogonality ** 2
+    if w1 + w2 > 0:
+        # Both terms compare b_a[i] with a row of b: w1 |a - x_j|^2 + w2 |a - y_j|^2 equals
+        # (w1 + w2) |a - m_j|^2 + w1 w2 / (w1 + w2) |x_j - y_j|^2 with m_j their weighted mean:
+        # one block of k columns and one column carrying the j-only part, not two blocks.
+        x, y = b_b @ c_ba, b_b @ c_ab.T
+        total = w1 + w2
+        queries += [np.sqrt(total) * b_a, np.zeros((len(b_a), 1))]
+        references += [(w1 * x + w2 * y) / np.sqrt(total),
+                       np.sqrt(w1 * w2 / total) * np.linalg.norm(x - y, axis=1)[:, None]]
     if config.landmark_weight > 0 and f_a is not None:
         queries.append(config.landmark_weight * f_a)
         references.append(config.landmark_weight * f_b)
@@ -300,9 +371,10 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     sizes = list(range(min(config.basis_start, largest), largest + 1, config.basis_step))
     if sizes[-1] != largest:
         sizes.append(largest)
+    fit_1, fit_2 = _Fitter(basis_1[:, :largest]), _Fitter(basis_2[:, :largest])
     for i, k in enumerate(sizes):
         b1, b2 = basis_1[:, :k], basis_2[:, :k]
-        c_12, c_21 = _fit_map(b1, b2[map_12]), _fit_map(b2, b1[map_21])
+        c_12, c_21 = fit_1.fit(b2[map_12]), fit_2.fit(b1[map_21])
         if i < len(sizes) - 1:
             q, r = _embeddings(b1, b2, c_12, c_21, config, fields_1, fields_2)
             map_12 = nearest_rows(r, q)
@@ -355,56 +427,145 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     say = progress or (lambda stage: None)
     timings = {}
     t = time.perf_counter()
+    mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
+    if 0 < config.zoomout_samples < max(mesh_1.n_vertices, mesh_2.n_vertices):
+        sample_1, sample_2 = _surface_sample(shape_1, config), _surface_sample(shape_2, config)
+    else:
+        sample_1, sample_2 = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
+    basis_1 = basis_2 = None
+    if config.method == "zoomout" or config.candidates > 1:
+        say("basis")
+        basis_1, basis_2 = _basis(shape_1, config), _basis(shape_2, config)
+    timings["basis"] = time.perf_counter() - t
+    t = time.perf_counter()
     say("landmarks")
-    src, tgt, fields_1, fields_2 = _landmark_pairs(shape_1, shape_2, correspondence, config)
-    if len(src) < MIN_LANDMARKS:
-        raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: only {len(src)} consistent landmark match(es), "
-                           f"a dense map needs at least {MIN_LANDMARKS}")
-    turns_1, turns_2 = orientation_coordinates(shape_1, fields_1), orientation_coordinates(shape_2, fields_2)
-    # Landmark coordinates: the distances, and their turns unless weighed 0.
-    coords_1, coords_2 = fields_1, fields_2
-    if config.orientation_weight > 0:
-        coords_1 = np.hstack([fields_1, config.orientation_weight * turns_1])
-        coords_2 = np.hstack([fields_2, config.orientation_weight * turns_2])
+    seeds = _seeds(shape_1, shape_2, correspondence, config, (sample_1, sample_2), (basis_1, basis_2))
+    if not seeds:
+        raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: fewer than {MIN_LANDMARKS} consistent landmark "
+                           f"matches, a dense map needs at least {MIN_LANDMARKS}")
+    seed = min(seeds, key=lambda s: s.signature)
+    src, tgt, fields_1, fields_2 = seed.source, seed.target, seed.fields_1, seed.fields_2
+    turns_1, turns_2, coords_1, coords_2 = seed.turns_1, seed.turns_2, seed.coords_1, seed.coords_2
+    timings["landmarks"] = time.perf_counter() - t
+    t = time.perf_counter()
     if config.method == "pyfm":
-        timings["landmarks"] = time.perf_counter() - t
-        t = time.perf_counter()
         say("pyfm")
-        local = pyfm_point_map(shape_1.mesh, shape_2.mesh, DENSE_PIPELINE, src, tgt)
+        local = pyfm_point_map(mesh_1, mesh_2, DENSE_PIPELINE, src, tgt)
         timings["pyfm"] = time.perf_counter() - t
     else:
-        map_12 = nearest_rows(coords_2, coords_1)  # (n1,) first maps by the landmark coordinates
-        map_21 = nearest_rows(coords_1, coords_2)  # (n2,)
-        timings["landmarks"] = time.perf_counter() - t
-        t = time.perf_counter()
-        say("basis")
-        basis_1 = _basis(shape_1, config.basis_size)
-        basis_2 = _basis(shape_2, config.basis_size)
-        timings["basis"] = time.perf_counter() - t
-        t = time.perf_counter()
         say("zoomout")
-        mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
-        if 0 < config.zoomout_samples < max(mesh_1.n_vertices, mesh_2.n_vertices):
-            sample_1 = _surface_sample(shape_1, config)
-            sample_2 = _surface_sample(shape_2, config)
-            # The maps restricted to the samples: each image snapped to the nearest sample.
-            sub_12 = nearest_rows(mesh_2.vertices[sample_2], mesh_2.vertices[map_12[sample_1]])
-            sub_21 = nearest_rows(mesh_1.vertices[sample_1], mesh_1.vertices[map_21[sample_2]])
-        else:
-            sample_1, sample_2 = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
-            sub_12, sub_21 = map_12, map_21
-        c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], sub_12, sub_21, config,
+        first_12 = nearest_rows(coords_2[sample_2], coords_1[sample_1])  # first maps by the landmark coordinates
+        first_21 = nearest_rows(coords_1[sample_1], coords_2[sample_2])
+        c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
                              coords_1[sample_1], coords_2[sample_2])
         k = len(c_12)
         q, r = _embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config, coords_1, coords_2)
-        local = nearest_rows(r, q)
+        if mesh_2.n_vertices > config.local_search_above and len(sample_2) < mesh_2.n_vertices:
+            local = nearest_rows_near(r, q, mesh_2.vertices, sample_2, config.local_search_reach)
+        else:
+            local = nearest_rows(r, q)
         timings["zoomout"] = time.perf_counter() - t
     target = np.full(shape_1.n_input_vertices, UNMAPPED, dtype=np.int64)
     on_mesh = shape_1.mesh_index(np.arange(shape_1.n_input_vertices))  # welded copies included
-    target[on_mesh >= 0] = shape_2.mesh.input_index[local[on_mesh[on_mesh >= 0]]]
-    landmarks = np.stack([shape_1.mesh.input_index[src], shape_2.mesh.input_index[tgt]], axis=1)
+    target[on_mesh >= 0] = mesh_2.input_index[local[on_mesh[on_mesh >= 0]]]
+    landmarks = np.stack([mesh_1.input_index[src], mesh_2.input_index[tgt]], axis=1)
     check = map_check(shape_1, local, fields_1, fields_2, turns_1, turns_2)
+    others = sorted(s.signature for s in seeds if s is not seed)
+    check.update(seed=seed.rank, seeds=len(seeds), signature=seed.signature,
+                 runner_up=others[0] if others else None)
+    check["trusted"] = bool(check["orientation"] >= config.trust_orientation
+                            and (not others or seed.signature <= (1.0 - config.trust_margin) * others[0]))
     return DenseMap(target, landmarks, timings, check)
+
+
+@dataclass(frozen=True)
+class _Seed:
+    """One candidate matching turned into landmarks and their coordinates on both shapes
+    (``(n, c)``), with the mean difference of the point signatures between source points and
+    their images under a short ZoomOut from it (``signature``, lower is better; 0 when alone)."""
+
+    rank: int
+    source: np.ndarray
+    target: np.ndarray
+    fields_1: np.ndarray
+    fields_2: np.ndarray
+    turns_1: np.ndarray
+    turns_2: np.ndarray
+    coords_1: np.ndarray
+    coords_2: np.ndarray
+    signature: float
+
+
+def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple, bases: tuple) -> list:
+    """The usable seeds among the correspondence and its first ``config.candidates - 1``
+    alternatives (``correspondence.alternatives``, the other matchings the sparse stage
+    weighed). With several, each seeds a short ZoomOut (``config.seed_basis`` eigenfunctions,
+    ``config.seed_samples`` of the samples) scored by how well its map keeps the shapes'
+    :func:`point_signature`: a seed of mirrored landmarks yields a map that keeps their
+    orientation only by turning the body round (front onto back), which no landmark coordinate
+    sees and the curvature of a face or a chest does."""
+    matchings = [correspondence] + list(getattr(correspondence, "alternatives", ()))[:max(config.candidates - 1, 0)]
+    fields = ({}, {})
+    seeds = []
+    scoring = None
+    for rank, matching in enumerate(matchings):
+        src, tgt, fields_1, fields_2 = _landmark_pairs(shape_1, shape_2, matching, config, fields)
+        if len(src) < MIN_LANDMARKS:
+            continue
+        turns_1, turns_2 = orientation_coordinates(shape_1, fields_1), orientation_coordinates(shape_2, fields_2)
+        # Landmark coordinates: the distances, and their turns unless weighed 0.
+        coords_1, coords_2 = fields_1, fields_2
+        if config.orientation_weight > 0:
+            coords_1 = np.hstack([fields_1, config.orientation_weight * turns_1])
+            coords_2 = np.hstack([fields_2, config.orientation_weight * turns_2])
+        score = 0.0
+        if len(matchings) > 1:
+            if scoring is None:
+                scoring = _SeedScoring(shape_1, shape_2, config, samples, bases)
+            score = scoring.score(coords_1, coords_2)
+        seeds.append(_Seed(rank, src, tgt, fields_1, fields_2, turns_1, turns_2, coords_1, coords_2, score))
+    return seeds
+
+
+class _SeedScoring:
+    """What scoring a seed needs, built once per pair: an evenly spread subset of the ZoomOut
+    samples, the bases there and the point signatures."""
+
+    def __init__(self, shape_1, shape_2, config: DenseConfig, samples: tuple, bases: tuple):
+        self.config = dataclasses.replace(config, basis_size=min(config.seed_basis, config.basis_size))
+        self.points = []
+        for sample in samples:
+            count = min(config.seed_samples, len(sample))
+            self.points.append(sample[np.linspace(0, len(sample) - 1, count).astype(np.int64)])
+        self.bases = [basis[points, :self.config.basis_size] for basis, points in zip(bases, self.points)]
+        self.signatures = [point_signature(shape, config)[points] for shape, points in zip((shape_1, shape_2),
+                                                                                          self.points)]
+
+    def score(self, coords_1: np.ndarray, coords_2: np.ndarray) -> float:
+        (p_1, p_2), (b_1, b_2) = self.points, self.bases
+        f_1, f_2 = coords_1[p_1], coords_2[p_2]
+        c_12, c_21 = zoomout(b_1, b_2, nearest_rows(f_2, f_1), nearest_rows(f_1, f_2), self.config, f_1, f_2)
+        k = len(c_12)
+        q, r = _embeddings(b_1[:, :k], b_2[:, :k], c_12, c_21, self.config, f_1, f_2)
+        return float(np.abs(self.signatures[0] - self.signatures[1][nearest_rows(r, q)]).mean())
+
+
+def point_signature(shape, config: DenseConfig) -> np.ndarray:
+    """``(n, len(config.signature_lengths))`` the shape's mean curvature diffused over each of
+    ``config.signature_lengths`` (:func:`darcyan.method.symmetry.curvature_signature`: intrinsic
+    enough to survive a change of pose, different on the front and the back of a body), on the
+    coarse proxy of a large mesh."""
+    from ..config import DarcyanConfig
+    from ..geometry.curvature import principal_curvatures
+    from ..method.symmetry import curvature_signature
+
+    describe = DarcyanConfig()
+    lengths, steps = config.signature_lengths, describe.heat.diffusion_steps
+    proxy = shape.proxy(config.basis_proxy_vertices) if config.basis_proxy_vertices > 0 else None
+    if proxy is None:
+        return curvature_signature(shape.mesh, shape.curvatures(describe.curvature_smoothing).mean, lengths, steps)
+    coarse_mean = principal_curvatures(proxy.mesh, smoothing=describe.curvature_smoothing).mean
+    return proxy.to_full(curvature_signature(proxy.mesh, coarse_mean, lengths, steps))
 
 
 def map_check(shape_1, local: np.ndarray, distances_1, distances_2, turns_1, turns_2) -> dict:

@@ -58,11 +58,19 @@ def nondegenerate_faces(mesh: Mesh, keep_collinear: bool = False) -> np.ndarray:
     return f[np.linalg.norm(np.cross(b - a, c - a), axis=1) > 0]
 
 
-def face_gradients(mesh: Mesh, fields: np.ndarray) -> np.ndarray:
-    """``(m, 3, k)`` the gradient of each of ``fields (n, k)`` (piecewise linear over the faces)
-    on each face, in the face's plane (libigl's ``grad``)."""
+def gradient_operator(mesh: Mesh):
+    """``(3m, n)`` libigl's ``grad``: a piecewise-linear vertex field to its gradient on each
+    face (all x components, then all y, then all z; scipy sparse)."""
     import igl  # lazily: igl imports scipy
 
+    return igl.grad(mesh.vertices, mesh.faces)
+
+
+def face_gradients(mesh: Mesh, fields: np.ndarray, operator=None) -> np.ndarray:
+    """``(m, 3, k)`` the gradient of each of ``fields (n, k)`` (piecewise linear over the faces)
+    on each face, in the face's plane (``operator``: the mesh's :func:`gradient_operator`, when
+    already built)."""
     fields = np.asarray(fields, dtype=np.float64).reshape(mesh.n_vertices, -1)
-    gradient = igl.grad(mesh.vertices, mesh.faces) @ fields  # (3m, k): all x, then all y, then all z
+    operator = gradient_operator(mesh) if operator is None else operator
+    gradient = operator @ fields  # (3m, k): all x, then all y, then all z
     return np.nan_to_num(gradient.reshape(3, mesh.n_faces, -1).transpose(1, 0, 2))

@@ -22,7 +22,7 @@ from .curvature import Curvatures, principal_curvatures
 from .denoise import denoise_mesh
 from .geodesics import GeodesicSolver, vertex_normals
 from .mesh import Mesh, MeshWarning, Normalization, local_index, normalize_mesh
-from .operators import cotangent_laplacian, mixed_voronoi_area
+from .operators import cotangent_laplacian, gradient_operator, mixed_voronoi_area
 from .repair import prepare_mesh
 from .spectral import SHIFT, Spectrum, laplace_beltrami_spectrum
 
@@ -85,6 +85,11 @@ class Shape:
         """``(n, n)`` cotangent Laplacian (scipy CSR, negative semidefinite)."""
         return cotangent_laplacian(self.mesh)
 
+    @cached_property
+    def gradient(self):
+        """``(3m, n)`` the face gradient of vertex fields (:func:`~darcyan.geometry.operators.gradient_operator`)."""
+        return gradient_operator(self.mesh)
+
     def curvatures(self, smoothing: int = 0) -> Curvatures:
         """Meyer principal curvatures after ``smoothing`` one-ring averaging iterations."""
         return self._once(("curvatures", smoothing), lambda: principal_curvatures(self.mesh, smoothing))
@@ -93,6 +98,18 @@ class Shape:
         """The ``k`` smallest Laplace-Beltrami eigenpairs (seeded: the same bytes every run)."""
         return self._once(("spectrum", k, tol, shift, laplacian),
                           lambda: laplace_beltrami_spectrum(self.mesh, k, laplacian, tol, shift))
+
+    def smooth_basis(self, k: int, proxy_vertices: int = 0, tol: float = 0.0, shift: float = SHIFT) -> np.ndarray:
+        """``(n, k)`` the ``k`` first Laplace-Beltrami eigenfunctions at the vertices. On a mesh
+        with more than twice ``proxy_vertices`` vertices they are computed on its coarse
+        :meth:`proxy` and interpolated (smooth functions lose nothing there; the eigensolver on
+        50k vertices takes tens of seconds), and are then not mass-orthonormal. ``tol``: the
+        eigensolver's relative accuracy (0: machine precision)."""
+        proxy = self.proxy(proxy_vertices) if proxy_vertices > 0 else None
+        if proxy is None:
+            return self.spectrum(k, tol, shift).vectors
+        return self._once(("proxy basis", k, proxy_vertices, tol, shift), lambda: proxy.to_full(
+            laplace_beltrami_spectrum(proxy.mesh, min(k, proxy.mesh.n_vertices - 1), tol=tol, shift=shift).vectors))
 
     def proxy(self, vertices: int):
         """A :class:`~darcyan.geometry.proxy.CoarseProxy` of about ``vertices`` vertices, or

@@ -148,6 +148,7 @@ class Correspondence:
     target_vertex: np.ndarray
     distance: np.ndarray
     matches_12: Matches
+    alternatives: tuple = ()
 
     def __len__(self) -> int:
         return len(self.source_vertex)
@@ -381,15 +382,21 @@ _CACHED_KEYS = {"feature_vertices", "feature_agd", "descriptors", "feature_geode
 def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
                  config: DarcyanConfig = DarcyanConfig()) -> Correspondence:
     """Match the feature points of ``shape_1`` to those of ``shape_2`` by descriptor distance."""
+    alternatives: list = []
     if config.matching == "consistent":
         candidates = consistent_candidates(shape_1.descriptors, shape_2.descriptors, shape_1.feature_geodesics,
                                            shape_2.feature_geodesics, config.consistency)
         matches = choose_orientation(candidates, shape_1.surface, shape_2.surface, config.mirror)
+        alternatives = [m for _, m in candidates[:config.mirror.candidates] if m is not matches]
     else:
         matches = match_descriptors(shape_1.descriptors, shape_2.descriptors, config.matching)
-    matches = drop_dissimilar(matches, shape_1.descriptors, shape_2.descriptors, config.max_match_distance)
-    return Correspondence(shape_1.feature_vertices[matches.source], shape_2.feature_vertices[matches.target],
-                          matches.distance, matches)
+
+    def correspondence(matches: Matches, alternatives=()) -> Correspondence:
+        matches = drop_dissimilar(matches, shape_1.descriptors, shape_2.descriptors, config.max_match_distance)
+        return Correspondence(shape_1.feature_vertices[matches.source], shape_2.feature_vertices[matches.target],
+                              matches.distance, matches, tuple(alternatives))
+
+    return correspondence(matches, [correspondence(m) for m in alternatives])
 
 
 def match_files(source, target, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
