@@ -47,6 +47,13 @@ def test_results_and_report_per_group(figures, tmp_path):
         assert 0 <= g["mean_error"] < 0.25 and len(g["curve"]) == len(results["taus"])
     dense = results["dense"]["darcyan"]["groups"]
     assert dense["far"]["samples"] == 2 * dense["near"]["samples"] == 400
+    # each dense map says which matching seeded it and how right that one was
+    records = results["dense"]["darcyan"]["pairs"]
+    for r in records:
+        assert 0 <= r["seed_correct"] <= r["seed_matches"] <= r["seed_features"] and "trusted" in r["check"]
+    if all(r["check"]["seed"] == 0 for r in records):  # seeded by the sparse matches: the same rate
+        for name, g in dense.items():
+            assert g["seed_rate"] == pytest.approx(sparse["groups"][name]["rate"])
     report = (tmp_path / "out" / "report.md").read_text()
     assert "## Per group" in report and "| near | darcyan | 1 |" in report
     assert (tmp_path / "out" / "group_curves.png").stat().st_size > 10_000

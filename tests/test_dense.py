@@ -188,6 +188,17 @@ def test_cli_dense_writes_one_row_per_source_vertex(small_pose_files, tmp_path, 
     assert capsys.readouterr().out.splitlines()[0] == "source_vertex,target_vertex,distance"
 
 
+@pytest.mark.slow
+def test_cli_verify_writes_the_verified_matches(small_pose_files, tmp_path, capsys):
+    source, target = small_pose_files
+    out = tmp_path / "m.csv"
+    assert main(["match", str(source), str(target), "--verify", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "verified:" in err or "not verified" in err
+    rows = list(csv.DictReader(io.StringIO(out.read_text())))
+    assert rows and set(rows[0]) == {"source_vertex", "target_vertex", "distance"}
+
+
 def test_cli_dense_error_is_one_line(tmp_path, capsys):
     bad = tmp_path / "bad.off"
     bad.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n")
@@ -307,6 +318,15 @@ def test_a_mirrored_seed_is_replaced_by_the_alternative_that_keeps_the_body(faus
     assert maps["seeds"].check["seed"] > 0 and maps["sparse only"].check["seed"] == 0
     assert scores["seeds"].rate >= 0.9 and scores["seeds"].mean <= 0.03
     assert maps["seeds"].check["signature"] < maps["seeds"].check["runner_up"]
+    # the same choice as sparse matches: all right, where the sparse stage's were not
+    from darcyan.dense import verified_matches
+    from darcyan.eval.metrics import score_matches
+
+    verified, about = verified_matches(*shapes, correspondence)
+    assert about["seed"] == maps["seeds"].check["seed"]
+    before, after = score_matches(*shapes, correspondence, truth), score_matches(*shapes, verified, truth)
+    assert before.correct < len(correspondence) and after.correct == len(verified) >= 5
+    assert any(m is correspondence for m in verified.alternatives)  # the sparse matching stays an alternative
 
 
 def test_merged_zoomout_terms_measure_the_same_distances():

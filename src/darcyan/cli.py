@@ -141,10 +141,24 @@ def cmd_match(args: argparse.Namespace) -> int:
     for target, description in zip(targets, descriptions[1:]):
         correspondence = match_shapes(descriptions[0], description, config)
         shapes = score = dense = None
-        if args.dense or args.plot or args.html or args.truth:  # prepared once for the map, score and pictures
+        if args.dense or args.plot or args.html or args.truth or args.verify:  # prepared once for all of them
             if source_shape is None:
                 source_shape = load_shape(args.source, config, args.repair, warn=False)
             shapes = [source_shape, load_shape(target, config, args.repair, warn=False)]
+        if args.verify:
+            from .dense.maps import verified_matches
+
+            say("verifying the matches")
+            try:
+                correspondence, about = verified_matches(shapes[0], shapes[1], correspondence)
+            except DarcyanError as exc:
+                print(f"darcyan: warning: {target}: the matches were not verified: {exc}", file=sys.stderr)
+                about = None
+        if args.verify and about is not None:
+            say("verified: " + ("the feature matches hold" if about["seed"] == 0 else
+                                f"alternative matching {about['seed']} replaces them (its short dense map keeps the "
+                                f"curvature signature better)")
+                + ("" if about["clear"] else "; the candidates score close: check the matches (--plot)"))
         if args.truth:
             truth = read_truth(args.truth, descriptions[0].n_input_vertices, description.n_input_vertices)
             score = score_matches(shapes[0], shapes[1], correspondence, truth)
@@ -369,6 +383,9 @@ def build_parser() -> argparse.ArgumentParser:
                         f"geodesic layout and orientation too (default {DarcyanConfig().matching})")
     p.add_argument("--dense", action="store_true", help="write a dense map instead: CSV source_vertex,target_vertex, "
                    "one row per source vertex, seeded by the feature matches (geodesic landmark coordinates refined by ZoomOut)")
+    p.add_argument("--verify", action="store_true", help="weigh the feature matches against the other matchings the "
+                   "orientation test considered by short dense maps (which keeps the shapes' curvature better?) and "
+                   "write the winner: fixes mirrored matches of people (about 1.5 s more for 5k-vertex shapes)")
     p.add_argument("--jobs", type=int, default=2, help="processes describing the two shapes at once when neither "
                    "is in the cache (default %(default)s)")
     p.add_argument("--plot", metavar="FILE.png", help="also draw the matches side by side to a PNG (with --dense: the "

@@ -469,17 +469,7 @@ def _sparse_records(job: dict, target: Shape) -> list:
     settings: BenchSettings = job["settings"]
     src, tgt = job["source_rec"], job["target_rec"]
     features = np.asarray(src["features"], dtype=np.int64)
-    truth = job["truth"]
-    if truth["kind"] == "identity":
-        true_input = features
-        sym_input = None if truth["mirror"] is None else np.asarray(truth["mirror"])[features]
-    else:
-        nearest = np.asarray(src["nearest_sample"], dtype=np.int64)
-        true_input = read_vts(truth["target_vts"], target.n_input_vertices)[nearest]
-        sym_input = None if truth["target_sym"] is None else read_vts(truth["target_sym"], target.n_input_vertices)[nearest]
-    true_t = target.mesh_index(true_input, nearest=True)
-    sym_t = None if sym_input is None else target.mesh_index(sym_input, nearest=True)
-    target_features = target.mesh_index(tgt["features"], nearest=True)
+    true_input, true_t, sym_t, target_features = _feature_truth(job, target)
     fields: dict = {}
     records = []
     for method in job["methods"]:
@@ -512,6 +502,35 @@ def _sparse_records(job: dict, target: Shape) -> list:
             "errors_sym": _json_floats(score.errors_sym), "repeatable": score.repeatable.tolist(),
             "repeatable_sym": score.repeatable_sym.tolist(), "seconds": seconds})
     return records
+
+
+def _feature_truth(job: dict, target: Shape) -> tuple:
+    """For the source's feature points: their true correspondents (input numbering, and on the
+    target's mesh), their mirror images' (or ``None``), and the target's feature points on its mesh."""
+    src, tgt, truth = job["source_rec"], job["target_rec"], job["truth"]
+    features = np.asarray(src["features"], dtype=np.int64)
+    if truth["kind"] == "identity":
+        true_input = features
+        sym_input = None if truth["mirror"] is None else np.asarray(truth["mirror"])[features]
+    else:
+        nearest = np.asarray(src["nearest_sample"], dtype=np.int64)
+        true_input = read_vts(truth["target_vts"], target.n_input_vertices)[nearest]
+        sym_input = None if truth["target_sym"] is None else read_vts(truth["target_sym"], target.n_input_vertices)[nearest]
+    true_t = target.mesh_index(true_input, nearest=True)
+    sym_t = None if sym_input is None else target.mesh_index(sym_input, nearest=True)
+    return true_input, true_t, sym_t, target.mesh_index(tgt["features"], nearest=True)
+
+
+def _seed_score(job: dict, target: Shape, correspondence, seed: int) -> dict:
+    """The sparse score of the matching that seeded darcyan's dense map (the sparse matches, or
+    the alternative the dense stage preferred): ``seed_features``, ``seed_matches``, ``seed_correct``."""
+    settings: BenchSettings = job["settings"]
+    _, true_t, sym_t, target_features = _feature_truth(job, target)
+    matches = ([correspondence] + list(correspondence.alternatives))[seed].matches_12
+    score = score_pair(target.solver, target_features[matches.target], true_t, sym_t, target_features,
+                       settings.threshold, match_rows=matches.source)
+    return {"seed_features": score.features, "seed_matches": len(matches.source),
+            "seed_correct": int((score.errors <= settings.threshold).sum())}
 
 
 # A dense map that fails on a pair (too few consistent landmarks, an eigensolver that does not
@@ -548,6 +567,7 @@ def _dense_records(job: dict, target: Shape) -> list:
                 result = dense_map(source, target, correspondence, DenseConfig())
                 info["landmarks"] = len(result.landmarks)
                 info["check"] = result.check
+                info.update(_seed_score(job, target, correspondence, result.check["seed"]))
             else:
                 result = pyfm_own_map(source.mesh, target.mesh, source.n_input_vertices)
             maps[method] = result.target
@@ -948,8 +968,9 @@ def summarize_dense(records: list) -> dict:
     Per class, group and overall: ``pairs``, ``failed`` (pairs without a map), ``samples``,
     ``within``, ``rate`` (within / samples, pooled), ``mean_error`` (over the mapped samples),
     ``curve`` (pooled cumulative curve over ``CURVE_TAUS``), ``seconds`` (sum of the dense
-    stages), ``seconds_per_pair`` and ``untrusted`` (maps whose own check doubts them); overall
-    also ``rate_class_mean``.
+    stages), ``seconds_per_pair``, ``untrusted`` (maps whose own check doubts them) and
+    ``seed_rate`` (strict rate of the matchings that seeded darcyan's maps); overall also
+    ``rate_class_mean``.
     """
     out = {}
     for method, rows in _by_method(records, DENSE_METHODS).items():
@@ -968,7 +989,10 @@ def _pool_dense(rows: list) -> dict:
     error_sum = sum(r["mean_error"] * r["mapped"] for r in rows if r["mapped"])
     curve = sum(np.asarray(r["curve"]) * r["samples"] for r in rows) / samples if samples else np.zeros(len(CURVE_TAUS))
     seconds = float(sum(r["seconds"] for r in rows))
-    return {"pairs": len(rows), "failed": sum(1 for r in rows if r.get("failed")),
+    seeded = [r for r in rows if "seed_matches" in r]
+    seed_matches = sum(r["seed_matches"] for r in seeded)  # the sparse rate's definition: correct / matches
+    return {"seed_rate": sum(r["seed_correct"] for r in seeded) / seed_matches if seed_matches else None,
+            "pairs": len(rows), "failed": sum(1 for r in rows if r.get("failed")),
             "untrusted": sum(1 for r in rows if (r.get("check") or {}).get("trusted") is False), "samples": samples,
             "within": within, "rate": within / samples if samples else None,
             "mean_error": error_sum / mapped if mapped else None, "curve": np.asarray(curve).tolist(),
@@ -1113,9 +1137,12 @@ def _group_report(results: dict) -> list:
         return []
     lines = ["", "## Per group", "",
              "Sparse: strict rate, rate allowing flips, mean geodesic error of the matches (sqrt(area) units); "
-             "dense: share of sampled vertices within the threshold and their mean geodesic error.", "",
-             "| group | method | pairs | sparse rate | rate_sym | sparse mean error | dense within | dense mean error |",
-             "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+             "dense: share of sampled vertices within the threshold and their mean geodesic error; seed "
+             "rate: the strict rate of the matchings that seeded the dense maps (the sparse matches, or the "
+             "alternative the dense stage preferred).", "",
+             "| group | method | pairs | sparse rate | rate_sym | sparse mean error | dense within | dense mean error "
+             "| seed rate |",
+             "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for group in names:
         for name in dict.fromkeys(list(methods) + list(dense)):
             s = methods.get(name, {}).get("groups", {}).get(group)
@@ -1125,7 +1152,8 @@ def _group_report(results: dict) -> list:
             pairs = s["pairs"] if s else d["pairs"]
             lines.append(f"| {group} | {name} | {pairs} | {_pct(s['rate']) if s else ''} | "
                          f"{_pct(s['rate_sym']) if s else ''} | {_fmt(s['mean_error']) if s else ''} | "
-                         f"{_pct(d['rate']) if d else ''} | {_fmt(d['mean_error']) if d else ''} |")
+                         f"{_pct(d['rate']) if d else ''} | {_fmt(d['mean_error']) if d else ''} | "
+                         f"{_pct(d['seed_rate']) if d and d.get('seed_rate') is not None else ''} |")
     return lines
 
 
@@ -1137,8 +1165,8 @@ def _dense_report(results: dict) -> list:
     chosen = (results.get("settings") or {}).get("dense") or {}
     lines = ["", f"## Dense maps: within {results['threshold']} / mean error / seconds per pair", ""]
     lines.append(f"{chosen.get('samples', '?')} source vertices per pair (seed {chosen.get('seed', '?')}). "
-                 "darcyan: the dense map seeded by darcyan's sparse matches, or by the alternative matching "
-                 "whose first map keeps the curvature signature best (geodesic landmark coordinates "
+                 "darcyan: the dense map seeded by darcyan's sparse matches, or by an alternative matching "
+                 "whose short ZoomOut map keeps the curvature signature clearly better (geodesic landmark coordinates "
                  "refined by ZoomOut; 'not trusted': the map's own check doubts it); pyfm: pyFM's own pipeline (WKS, 50 x 50 functional map, ZoomOut to "
                  "200) without darcyan's landmarks. " + results.get("dense_definition", DENSE_DEFINITION))
     if not dense:

@@ -13,10 +13,18 @@ bijectivity term holds it.
 
 Sparse matches may be wrong (symmetric flips, wrong extremities): by default only the largest
 set of matches whose pairwise geodesic distances agree on both shapes is used (see
-:func:`consistent_landmarks`).
+:func:`consistent_landmarks`), and the sparse matching competes with the alternatives the
+sparse stage weighed (``Correspondence.alternatives``): each seeds a short ZoomOut, and the one
+whose map best keeps a curvature signature seeds the dense map (a mirrored seed keeps every
+distance and, with the orientation coordinates, turns the body round: front onto back, which
+the curvature of a face or a chest shows). ``DenseMap.check`` says which seed was used and
+whether the map is trusted.
+
+Large meshes: the basis is computed on a decimated proxy and interpolated, and the final map
+searches each image near its nearest ZoomOut sample (:func:`darcyan.geometry.knn.nearest_rows_near`).
 
 Memory stays O(V): the functional maps are k x k, nearest neighbours are searched with a k-d
-tree (few dimensions) or by chunks of source rows (spectral dimensions).
+tree (few dimensions) or by blocks of source rows (spectral dimensions).
 
 :func:`evaluate_dense` scores a dense map against ground truth on a fixed random sample of
 source vertices with the standard geodesic error (see :mod:`darcyan.eval.metrics`);
@@ -93,9 +101,11 @@ class DenseConfig:
         seed_basis, seed_samples: size of the short ZoomOut that scores each seed, and the
             samples it runs on.
         signature_lengths: diffusion lengths (sqrt(area)) of the mean curvature in that signature.
-        trust_orientation, trust_margin: a map is ``trusted`` (``DenseMap.check``) when its
-            orientation agreement is at least ``trust_orientation`` and its seed's signature
-            score beats the runner-up's by at least ``trust_margin`` (relative).
+        seed_margin: an alternative replaces the sparse matching only when its score is lower
+            by at least this share; the map is ``trusted`` (``DenseMap.check``) only when no
+            other seed scores within this share of its own.
+        trust_orientation: ... and when its orientation agreement is at least this (a map
+            flipped against its landmarks scores -0.5 to -0.7, a right one 0.6 to 0.9).
         local_search_above: a target mesh with more vertices than this is searched coarse to
             fine for the final map (:func:`darcyan.geometry.knn.nearest_rows_near`: near the
             image's nearest ZoomOut sample) instead of over all its vertices: O(V) instead of
@@ -123,8 +133,8 @@ class DenseConfig:
     seed_basis: int = 30
     seed_samples: int = 1000
     signature_lengths: tuple = (0.02, 0.05, 0.1)
+    seed_margin: float = 0.04
     trust_orientation: float = 0.3
-    trust_margin: float = 0.02
     local_search_above: int = 20000
     local_search_reach: int = 16
     seed: int = 0
@@ -153,7 +163,7 @@ class DenseConfig:
         if not (isinstance(self.trust_orientation, (int, float)) and -1 <= self.trust_orientation <= 1):
             raise ConfigError(f"dense: trust_orientation must be in [-1, 1], got {self.trust_orientation!r}")
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
-                     "orientation_weight", "trust_margin", "basis_tolerance"):
+                     "orientation_weight", "seed_margin", "basis_tolerance"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value >= 0):
                 raise ConfigError(f"dense: {name} must be non-negative, got {value!r}")
@@ -170,8 +180,9 @@ class DenseMap:
         timings: seconds per stage.
         check: what :func:`map_check` says of the map (``orientation`` in [-1, 1], ``distortion``),
             which seed was used (``seed``: 0 the sparse matching, i its i-th alternative, of
-            ``seeds`` usable ones), its ``signature`` score and the ``runner_up``'s, and whether
-            the map is ``trusted`` (see :class:`DenseConfig`).
+            ``seeds`` usable ones), its ``signature`` score, the ``runner_up``'s and every
+            seed's (``signatures``: rank -> score), whether no other seed came within the
+            margin (``clear``) and whether the map is ``trusted`` (see :class:`DenseConfig`).
     """
 
     target: np.ndarray
@@ -420,33 +431,13 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             usable landmark pairs remain.
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
-    for shape in (shape_1, shape_2):
-        if not hasattr(shape, "mesh_index"):
-            raise DarcyanError(f"{shape.name}: a dense map works on prepared shapes, not on a description "
-                               f"(darcyan.load_shape(path) or darcyan.prepare_shape(mesh) gives one)")
     say = progress or (lambda stage: None)
-    timings = {}
-    t = time.perf_counter()
+    timings: dict = {}
+    choice = _choose_seed(shape_1, shape_2, correspondence, config, say, timings)
+    seed, seeds, (sample_1, sample_2), (basis_1, basis_2) = choice
     mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
-    if 0 < config.zoomout_samples < max(mesh_1.n_vertices, mesh_2.n_vertices):
-        sample_1, sample_2 = _surface_sample(shape_1, config), _surface_sample(shape_2, config)
-    else:
-        sample_1, sample_2 = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
-    basis_1 = basis_2 = None
-    if config.method == "zoomout" or config.candidates > 1:
-        say("basis")
-        basis_1, basis_2 = _basis(shape_1, config), _basis(shape_2, config)
-    timings["basis"] = time.perf_counter() - t
-    t = time.perf_counter()
-    say("landmarks")
-    seeds = _seeds(shape_1, shape_2, correspondence, config, (sample_1, sample_2), (basis_1, basis_2))
-    if not seeds:
-        raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: fewer than {MIN_LANDMARKS} consistent landmark "
-                           f"matches, a dense map needs at least {MIN_LANDMARKS}")
-    seed = min(seeds, key=lambda s: s.signature)
     src, tgt, fields_1, fields_2 = seed.source, seed.target, seed.fields_1, seed.fields_2
     turns_1, turns_2, coords_1, coords_2 = seed.turns_1, seed.turns_2, seed.coords_1, seed.coords_2
-    timings["landmarks"] = time.perf_counter() - t
     t = time.perf_counter()
     if config.method == "pyfm":
         say("pyfm")
@@ -470,12 +461,67 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     target[on_mesh >= 0] = mesh_2.input_index[local[on_mesh[on_mesh >= 0]]]
     landmarks = np.stack([mesh_1.input_index[src], mesh_2.input_index[tgt]], axis=1)
     check = map_check(shape_1, local, fields_1, fields_2, turns_1, turns_2)
-    others = sorted(s.signature for s in seeds if s is not seed)
-    check.update(seed=seed.rank, seeds=len(seeds), signature=seed.signature,
-                 runner_up=others[0] if others else None)
-    check["trusted"] = bool(check["orientation"] >= config.trust_orientation
-                            and (not others or seed.signature <= (1.0 - config.trust_margin) * others[0]))
+    check.update(_seed_check(seed, seeds, config.seed_margin))
+    check["trusted"] = bool(check["orientation"] >= config.trust_orientation and check["clear"])
     return DenseMap(target, landmarks, timings, check)
+
+
+def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig()):
+    """The matching a dense map would be seeded by: ``correspondence`` itself, or the alternative
+    (``correspondence.alternatives``) whose short ZoomOut map keeps the curvature signature
+    clearly better (see :class:`DenseConfig`: ``candidates``, ``seed_margin``). Costs the two
+    shapes' bases and a short ZoomOut per candidate (about 1.5 s for two 5k-vertex shapes).
+
+    Returns ``(matches, about)``: a correspondence of the same kind as ``correspondence`` (its
+    ``alternatives`` the others, the sparse matching first among them), and what
+    :attr:`DenseMap.check` says of seeds (``seed``, ``signatures``, ``clear``: no other
+    candidate within the margin).
+
+    Raises:
+        DarcyanError: when no candidate has :data:`MIN_LANDMARKS` consistent matches.
+    """
+    shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
+    seed, seeds, _, _ = _choose_seed(shape_1, shape_2, correspondence, config, lambda stage: None, {})
+    matchings = [correspondence] + list(getattr(correspondence, "alternatives", ()))
+    chosen = matchings[seed.rank]
+    if seed.rank > 0:
+        chosen = dataclasses.replace(chosen, alternatives=tuple(m for m in matchings if m is not chosen))
+    return chosen, _seed_check(seed, seeds, config.seed_margin)
+
+
+def _seed_check(seed, seeds: list, margin: float) -> dict:
+    others = sorted(s.signature for s in seeds if s is not seed)
+    return {"seed": seed.rank, "seeds": len(seeds), "signature": seed.signature,
+            "runner_up": others[0] if others else None, "signatures": {s.rank: s.signature for s in seeds},
+            "clear": bool(not others or seed.signature <= (1.0 - margin) * others[0])}
+
+
+def _choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, timings: dict) -> tuple:
+    """``(seed, seeds, samples, bases)``: the ZoomOut samples and bases of both shapes, the
+    usable seeds and the one chosen (see :func:`_chosen_seed`)."""
+    for shape in (shape_1, shape_2):
+        if not hasattr(shape, "mesh_index"):
+            raise DarcyanError(f"{shape.name}: a dense map works on prepared shapes, not on a description "
+                               f"(darcyan.load_shape(path) or darcyan.prepare_shape(mesh) gives one)")
+    t = time.perf_counter()
+    mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
+    if 0 < config.zoomout_samples < max(mesh_1.n_vertices, mesh_2.n_vertices):
+        samples = _surface_sample(shape_1, config), _surface_sample(shape_2, config)
+    else:
+        samples = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
+    bases = (None, None)
+    if config.method == "zoomout" or config.candidates > 1:
+        say("basis")
+        bases = _basis(shape_1, config), _basis(shape_2, config)
+    timings["basis"] = time.perf_counter() - t
+    t = time.perf_counter()
+    say("landmarks")
+    seeds = _seeds(shape_1, shape_2, correspondence, config, samples, bases)
+    if not seeds:
+        raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: fewer than {MIN_LANDMARKS} consistent landmark "
+                           f"matches, a dense map needs at least {MIN_LANDMARKS}")
+    timings["landmarks"] = time.perf_counter() - t
+    return _chosen_seed(seeds, config.seed_margin), seeds, samples, bases
 
 
 @dataclass(frozen=True)
@@ -494,6 +540,13 @@ class _Seed:
     coords_1: np.ndarray
     coords_2: np.ndarray
     signature: float
+
+
+def _chosen_seed(seeds: list, margin: float) -> "_Seed":
+    """The seed with the lowest signature score, unless it beats the first usable seed (the
+    sparse matching, when usable) by less than ``margin`` (relative): then that one."""
+    best = min(seeds, key=lambda s: s.signature)
+    return best if best.signature < (1.0 - margin) * seeds[0].signature else seeds[0]
 
 
 def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple, bases: tuple) -> list:
