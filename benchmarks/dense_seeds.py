@@ -42,6 +42,14 @@ SAMPLES = 300
 
 
 def score_pair(task: tuple) -> dict:
+    """One pair's seeds, scores and maps' rates; a pair that fails is recorded with its error."""
+    try:
+        return _score_pair(task)
+    except (DarcyanError, OSError) as exc:
+        return {"pair": f"{task[1]}->{task[2]}", "group": task[3], "failed": str(exc), "seeds": []}
+
+
+def _score_pair(task: tuple) -> dict:
     dataset, source, target, group = task
     warnings.simplefilter("ignore")
     config = DarcyanConfig()
@@ -91,6 +99,9 @@ def main(argv=None) -> int:
     try:
         lines = [line.split("\t") for line in args.pairs.read_text().splitlines()
                  if line.strip() and not line.startswith("#")]
+        for number, line in enumerate(lines, 1):
+            if len(line) < 2:
+                raise DarcyanError(f"{args.pairs}: pair {number}: 'source<TAB>target[<TAB>group]' expected")
         if not (DATA / args.dataset).is_dir():
             raise DarcyanError(f"{DATA / args.dataset}: no such dataset folder (set DARCYAN_DATA)")
         done = [json.loads(line) for line in args.out.read_text().splitlines()] if args.out.exists() else []
@@ -107,8 +118,9 @@ def main(argv=None) -> int:
             journal.write(json.dumps(result) + "\n")
             journal.flush()
             done.append(result)
-            print(f"{len(done)}/{len(lines)} {result['pair']}: seed {result['default_seed']}, "
-                  f"{result['default_rate']:.2f} within 0.05", file=sys.stderr)
+            print(f"{len(done)}/{len(lines)} {result['pair']}: " + (
+                f"failed: {result['failed']}" if "failed" in result else
+                f"seed {result['default_seed']}, {result['default_rate']:.2f} within 0.05"), file=sys.stderr)
     print("\n".join(summary(done)))
     return 0
 

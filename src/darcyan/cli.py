@@ -146,34 +146,32 @@ def cmd_match(args: argparse.Namespace) -> int:
                 source_shape = load_shape(args.source, config, args.repair, warn=False)
             shapes = [source_shape, load_shape(target, config, args.repair, warn=False)]
         if args.verify:
-            from .dense.maps import verified_matches
+            from .dense.maps import DENSE_FAILURES, verified_matches
 
             say("verifying the matches")
             try:
                 correspondence, about = verified_matches(shapes[0], shapes[1], correspondence)
-            except DarcyanError as exc:
+                print(f"darcyan: {target}: verified: {_seed_verdict(about)}", file=sys.stderr)
+            except DENSE_FAILURES as exc:
                 print(f"darcyan: warning: {target}: the matches were not verified: {exc}", file=sys.stderr)
-                about = None
-        if args.verify and about is not None:
-            say("verified: " + ("the feature matches hold" if about["seed"] == 0 else
-                                f"alternative matching {about['seed']} replaces them (its short dense map keeps the "
-                                f"curvature signature better)")
-                + ("" if about["clear"] else "; the candidates score close: check the matches (--plot)"))
         if args.truth:
             truth = read_truth(args.truth, descriptions[0].n_input_vertices, description.n_input_vertices)
             score = score_matches(shapes[0], shapes[1], correspondence, truth)
             print(f"darcyan: {score.summary()}", file=sys.stderr)
         if args.dense:
-            from .dense.maps import UNMAPPED, dense_map
+            from .dense.maps import DENSE_FAILURES, UNMAPPED, dense_map
 
-            dense = dense_map(shapes[0], shapes[1], correspondence, progress=lambda stage: say(f"dense map: {stage}"))
+            try:
+                dense = dense_map(shapes[0], shapes[1], correspondence, progress=lambda stage: say(f"dense map: {stage}"))
+            except DENSE_FAILURES as exc:  # one line, never a traceback
+                raise DarcyanError(f"{args.source} -> {target}: no dense map: {exc}") from None
             if dense.check:
                 check = dense.check
-                seed = ("the sparse matches" if check["seed"] == 0 else
-                        f"alternative matching {check['seed']} (its map keeps the curvature signature better)")
-                say(f"dense map: seeded by {seed}; orientation agreement {check['orientation']:.2f} (1: kept, "
-                    f"-1: mirrored), landmark distortion {check['distortion']:.3f} sqrt(area); "
-                    + ("trusted" if check["trusted"] else "NOT trusted: check the map (--plot)"))
+                say(f"dense map: {_seed_verdict(check)}; orientation agreement {check['orientation']:.2f} (1: kept, "
+                    f"-1: mirrored), landmark distortion {check['distortion']:.3f} sqrt(area)")
+                if not check["trusted"]:
+                    print(f"darcyan: warning: {target}: the dense map is not trusted (another seed scored close, or its "
+                          f"orientation disagrees with its landmarks): look at it (--plot)", file=sys.stderr)
             left_out = int((dense.target == UNMAPPED).sum())
             if left_out:
                 print(f"darcyan: warning: {args.source}: {left_out} vertices outside the matched component "
@@ -253,6 +251,22 @@ def _dense_text(source: str, target: str, map_12, form: str) -> str:
         return json.dumps({"source": str(source), "target": str(target),
                            "target_vertex": [int(v) for v in map_12]}) + "\n"
     return dense_map_to_csv(map_12)
+
+
+def _seed_verdict(about: dict) -> str:
+    """What the seed check (``DenseMap.check`` or ``verified_matches``' second result) decided."""
+    if about["seeds"] == 1:
+        return ("the feature matches, nothing to weigh them against" if about["seed"] == 0 else
+                f"alternative matching {about['seed']}: the feature matches have too few consistent matches")
+    if about["seed"] == 0:
+        verdict = "the feature matches hold against their alternatives"
+    elif 0 not in about["signatures"]:
+        verdict = (f"alternative matching {about['seed']} replaces the feature matches (they have too few "
+                   f"consistent matches)")
+    else:
+        verdict = (f"alternative matching {about['seed']} replaces the feature matches (its short dense map keeps "
+                   f"the shapes' curvature clearly better)")
+    return verdict + ("" if about["clear"] else "; another candidate scores close: look at the matches (--plot)")
 
 
 def _progress(args: argparse.Namespace):

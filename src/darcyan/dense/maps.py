@@ -52,6 +52,9 @@ UNMAPPED = -1  # source vertices the analysis left out (outside the largest comp
 # Shift of the shift-invert eigen solver (just below the zero eigenvalue of the Laplacian).
 EIGSH_SHIFT = -1e-8
 MIN_LANDMARKS = 3
+# What a dense map may raise on a pair it cannot map (too few consistent landmarks, an eigensolver
+# that does not converge): callers report it and go on (the bench records the pair as failed).
+DENSE_FAILURES = (DarcyanError, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError)
 # Consistent landmark sets: exact maximum-clique search up to this many matches, greedy above.
 MAX_EXHAUSTIVE_LANDMARKS = 24
 # Weight of the (normalized) descriptor distances when breaking ties between landmark sets.
@@ -157,13 +160,15 @@ class DenseConfig:
                 raise ConfigError(f"dense: {name} must be a non-negative integer, got {value!r}")
         lengths = self.signature_lengths
         if (not isinstance(lengths, (list, tuple)) or not lengths
-                or not all(isinstance(x, (int, float)) and x > 0 for x in lengths)):
+                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0 for x in lengths)):
             raise ConfigError(f"dense: signature_lengths must be a list of positive lengths, got {lengths!r}")
         object.__setattr__(self, "signature_lengths", tuple(float(x) for x in lengths))
+        if not (isinstance(self.seed_margin, (int, float)) and 0 <= self.seed_margin < 1):
+            raise ConfigError(f"dense: seed_margin must be in [0, 1), got {self.seed_margin!r}")
         if not (isinstance(self.trust_orientation, (int, float)) and -1 <= self.trust_orientation <= 1):
             raise ConfigError(f"dense: trust_orientation must be in [-1, 1], got {self.trust_orientation!r}")
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
-                     "orientation_weight", "seed_margin", "basis_tolerance"):
+                     "orientation_weight", "basis_tolerance"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value >= 0):
                 raise ConfigError(f"dense: {name} must be non-negative, got {value!r}")
@@ -266,9 +271,10 @@ def _basis(shape, config: DenseConfig) -> np.ndarray:
 # The dense map
 
 
-def _landmark_pairs(shape_1, shape_2, correspondence, config: DenseConfig, fields: tuple = ({}, {})):
+def _landmark_pairs(shape_1, shape_2, correspondence, config: DenseConfig, fields: tuple | None = None):
     """Landmark pairs in local numbering and their distance fields ``(n, k)`` on both shapes
     (``fields``: one ``{vertex: (n,) distance}`` per shape, read and filled in)."""
+    fields = ({}, {}) if fields is None else fields
     src = shape_1.mesh_index(correspondence.source_vertex)
     tgt = shape_2.mesh_index(correspondence.target_vertex)
     cost = np.asarray(getattr(correspondence, "distance", np.zeros(len(src))), dtype=np.float64)
@@ -327,12 +333,17 @@ class _Fitter:
     ``basis[:, :k] @ C ~ Y`` is two small products, not a new least squares."""
 
     def __init__(self, basis: np.ndarray):
-        self.q, r = np.linalg.qr(basis)
-        self.r_inverse = np.linalg.inv(r)
+        self.basis = basis
+        self.q = self.r_inverse = None
+        if basis.shape[0] >= basis.shape[1]:  # fewer samples than columns: least squares each time
+            self.q, r = np.linalg.qr(basis)
+            self.r_inverse = np.linalg.inv(r)
 
     def fit(self, mapped: np.ndarray) -> np.ndarray:
         """``(k, k)`` ``C`` with ``basis[:, :k] @ C ~ mapped`` (``mapped (s, k)``)."""
         k = mapped.shape[1]
+        if self.q is None:
+            return np.linalg.lstsq(self.basis[:, :k], mapped, rcond=None)[0]
         return self.r_inverse[:k, :k] @ (self.q[:, :k].T @ mapped)
 
 
@@ -427,8 +438,9 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         numbering of shape 2 (:data:`UNMAPPED` for vertices outside the analysed mesh).
 
     Raises:
-        DarcyanError: when a shape is a description only, or fewer than :data:`MIN_LANDMARKS`
-            usable landmark pairs remain.
+        DarcyanError: when a shape is a description only, or no seed (the correspondence or
+            one of its alternatives) has :data:`MIN_LANDMARKS` consistent landmark pairs. A
+            correspondence with fewer leaves the map to the best usable alternative.
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
     say = progress or (lambda stage: None)
@@ -542,7 +554,7 @@ class _Seed:
     signature: float
 
 
-def _chosen_seed(seeds: list, margin: float) -> "_Seed":
+def _chosen_seed(seeds: list, margin: float) -> _Seed:
     """The seed with the lowest signature score, unless it beats the first usable seed (the
     sparse matching, when usable) by less than ``margin`` (relative): then that one."""
     best = min(seeds, key=lambda s: s.signature)
@@ -581,11 +593,13 @@ def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple
 
 
 class _SeedScoring:
-    """What scoring a seed needs, built once per pair: an evenly spread subset of the ZoomOut
-    samples, the bases there and the point signatures."""
+    """What scoring a seed needs, built once per pair: ``seed_samples`` of the ZoomOut samples
+    (every so many of them: a random subset drawn by area like them), the bases there and the
+    point signatures."""
 
     def __init__(self, shape_1, shape_2, config: DenseConfig, samples: tuple, bases: tuple):
-        self.config = dataclasses.replace(config, basis_size=min(config.seed_basis, config.basis_size))
+        size = min(config.seed_basis, config.basis_size)
+        self.config = dataclasses.replace(config, basis_size=size, basis_start=min(config.basis_start, size))
         self.points = []
         for sample in samples:
             count = min(config.seed_samples, len(sample))
