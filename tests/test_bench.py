@@ -78,6 +78,7 @@ def test_classes_pairs_and_dataset_errors(tmp_path, figures):
         discover_dataset(tmp_path)
 
 
+@pytest.mark.slow  # over 5 s on the CI machine
 def test_bench_end_to_end_and_resume(capsys, tmp_path, figures):
     out = tmp_path / "out"
     code, stdout, err = run(capsys, "bench", figures, "--method", *METHODS, "--out", out)

@@ -8,6 +8,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from darcyan.geometry import synthetic
 from darcyan.geometry.shape import prepare_shape
@@ -17,6 +18,7 @@ from darcyan.geometry.shape import prepare_shape
 SCRIPT = """
 import hashlib, sys
 import numpy as np
+import pytest
 from darcyan import analyze_mesh, match_shapes, DarcyanConfig
 from darcyan.dense import DenseConfig, dense_map
 from darcyan.geometry import synthetic
@@ -41,6 +43,7 @@ def _hashes() -> dict:
     return dict(line.split() for line in out.splitlines())
 
 
+@pytest.mark.slow  # over 5 s on the CI machine
 def test_two_processes_give_the_same_bytes():
     first, second = _hashes(), _hashes()
     assert len(first) > 20  # every array of both descriptions, the matches, the dense map, a spectrum

@@ -139,6 +139,7 @@ def test_matches_viewer_in_chromium(browser, tmp_path):
     page.close()
 
 
+@pytest.mark.slow  # over 5 s on the CI machine
 def test_grid_viewer_in_chromium(browser, tmp_path):
     config = DarcyanConfig(levels=3, radial_lines=8, interpolation=1)
     scene = viz.grid_scene(synthetic.icosphere(4), vertex=0, config=config)
