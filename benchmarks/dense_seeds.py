@@ -18,24 +18,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import warnings
 from pathlib import Path
 
-import numpy as np
+from dense_variants import prepared_pair, read_pair_lines  # the sibling script: pairs and their data
 
-from darcyan import DarcyanConfig
 from darcyan.dense.maps import DenseConfig, dense_map
 from darcyan.errors import DarcyanError
 from darcyan.eval.dense_scores import evaluate_dense_maps
-from darcyan.eval.metrics import GroundTruth, read_vts
-from darcyan.io.cache import ShapeCache
-from darcyan.method.pipeline import describe_shapes, load_shape, match_shapes
 from darcyan.parallel import process_map
 
-REPO = Path(__file__).resolve().parents[1]
-DATA = Path(os.environ.get("DARCYAN_DATA", REPO.parent / "shared" / "data"))
 MARGINS = (0.0, 0.02, 0.03, 0.04, 0.05, 0.06, 0.08, 0.1)
 CLEAR = 0.15  # a seed's map is clearly better or worse than another's by this share within 0.05
 SAMPLES = 300
@@ -52,12 +45,7 @@ def score_pair(task: tuple) -> dict:
 def _score_pair(task: tuple) -> dict:
     dataset, source, target, group = task
     warnings.simplefilter("ignore")
-    config = DarcyanConfig()
-    files = [DATA / dataset / f"{source}.off", DATA / dataset / f"{target}.off"]
-    correspondence = match_shapes(*describe_shapes(files, config, cache=ShapeCache()), config)
-    shapes = [load_shape(f, config, warn=False) for f in files]
-    vts = [DATA / dataset / "corres" / f"{name}.vts" for name in (source, target)]
-    truth = GroundTruth(read_vts(vts[0]), read_vts(vts[1])) if vts[0].exists() else GroundTruth()
+    shapes, correspondence, truth = prepared_pair(dataset, source, target)
     default = dense_map(*shapes, correspondence)
     signatures = {int(rank): score for rank, score in default.check["signatures"].items()}
     matchings = [correspondence] + list(correspondence.alternatives)
@@ -97,28 +85,20 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, default=Path("dense-seeds.jsonl"))
     args = parser.parse_args(argv)
     try:
-        lines = [line.split("\t") for line in args.pairs.read_text().splitlines()
-                 if line.strip() and not line.startswith("#")]
-        for number, line in enumerate(lines, 1):
-            if len(line) < 2:
-                raise DarcyanError(f"{args.pairs}: pair {number}: 'source<TAB>target[<TAB>group]' expected")
-        if not (DATA / args.dataset).is_dir():
-            raise DarcyanError(f"{DATA / args.dataset}: no such dataset folder (set DARCYAN_DATA)")
+        pairs = read_pair_lines(args.pairs, args.dataset, args.count)
         done = [json.loads(line) for line in args.out.read_text().splitlines()] if args.out.exists() else []
     except (OSError, ValueError, DarcyanError) as exc:  # one line, no traceback (OSError names its file)
         print(f"dense_seeds.py: error: {exc}", file=sys.stderr)
         return 2
-    if args.count < len(lines):
-        lines = [lines[i] for i in sorted(np.random.default_rng(0).choice(len(lines), args.count, replace=False))]
     finished = {r["pair"] for r in done}
-    tasks = [(args.dataset, line[0].strip(), line[1].strip(), line[2].strip() if len(line) > 2 else args.dataset)
-             for line in lines if f"{line[0].strip()}->{line[1].strip()}" not in finished]
+    tasks = [(args.dataset, source, target, group) for source, target, group in pairs
+             if f"{source}->{target}" not in finished]
     with args.out.open("a") as journal:
         for result in (process_map(score_pair, tasks, 2) if tasks else []):
             journal.write(json.dumps(result) + "\n")
             journal.flush()
             done.append(result)
-            print(f"{len(done)}/{len(lines)} {result['pair']}: " + (
+            print(f"{len(done)}/{len(pairs)} {result['pair']}: " + (
                 f"failed: {result['failed']}" if "failed" in result else
                 f"seed {result['default_seed']}, {result['default_rate']:.2f} within 0.05"), file=sys.stderr)
     print("\n".join(summary(done)))

@@ -38,16 +38,37 @@ REPO = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("DARCYAN_DATA", REPO.parent / "shared" / "data"))
 
 
-def score_pair(task: tuple) -> dict:
-    dataset, source, target, group, variants = task
-    warnings.simplefilter("ignore")
+def prepared_pair(dataset: str, source: str, target: str) -> tuple:
+    """``(shapes, correspondence, truth)``: both shapes described (cached), matched with the
+    defaults and prepared, and the dataset's ``.vts`` ground truth (else the identity)."""
     config = DarcyanConfig()
     files = [DATA / dataset / f"{source}.off", DATA / dataset / f"{target}.off"]
-    descriptions = describe_shapes(files, config, cache=ShapeCache())
-    correspondence = match_shapes(*descriptions, config)
+    correspondence = match_shapes(*describe_shapes(files, config, cache=ShapeCache()), config)
     shapes = [load_shape(f, config, warn=False) for f in files]
     vts = [DATA / dataset / "corres" / f"{name}.vts" for name in (source, target)]
     truth = GroundTruth(read_vts(vts[0]), read_vts(vts[1])) if vts[0].exists() else GroundTruth()
+    return shapes, correspondence, truth
+
+
+def read_pair_lines(path: Path, dataset: str, count: int) -> list:
+    """``[(source, target, group), ...]``: ``count`` lines drawn (seed 0) from a pairs file
+    (``source<TAB>target[<TAB>group]``; group defaults to the dataset). Raises DarcyanError or
+    OSError naming the file."""
+    lines = [line.split("\t") for line in path.read_text().splitlines() if line.strip() and not line.startswith("#")]
+    for number, line in enumerate(lines, 1):
+        if len(line) < 2:
+            raise DarcyanError(f"{path}: pair {number}: 'source<TAB>target[<TAB>group]' expected")
+    if not (DATA / dataset).is_dir():
+        raise DarcyanError(f"{DATA / dataset}: no such dataset folder (set DARCYAN_DATA)")
+    if count < len(lines):
+        lines = [lines[i] for i in sorted(np.random.default_rng(0).choice(len(lines), count, replace=False))]
+    return [(line[0].strip(), line[1].strip(), line[2].strip() if len(line) > 2 else dataset) for line in lines]
+
+
+def score_pair(task: tuple) -> dict:
+    dataset, source, target, group, variants = task
+    warnings.simplefilter("ignore")
+    shapes, correspondence, truth = prepared_pair(dataset, source, target)
     maps, seconds, checks = {}, {}, {}
     for name, changes in variants.items():
         start = time.perf_counter()
@@ -89,17 +110,11 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         variants = read_variants(args.variants)
-        lines = [line.split("\t") for line in args.pairs.read_text().splitlines()
-                 if line.strip() and not line.startswith("#")]
-        if not (DATA / args.dataset).is_dir():
-            raise DarcyanError(f"{DATA / args.dataset}: no such dataset folder (set DARCYAN_DATA)")
+        pairs = read_pair_lines(args.pairs, args.dataset, args.count)
     except (OSError, DarcyanError) as exc:  # one line, no traceback (OSError names its file)
         print(f"dense_variants.py: error: {exc}", file=sys.stderr)
         return 2
-    if args.count < len(lines):
-        lines = [lines[i] for i in sorted(np.random.default_rng(0).choice(len(lines), args.count, replace=False))]
-    tasks = [(args.dataset, line[0].strip(), line[1].strip(), line[2].strip() if len(line) > 2 else args.dataset,
-              variants) for line in lines]
+    tasks = [(args.dataset, source, target, group, variants) for source, target, group in pairs]
     results = list(process_map(score_pair, tasks, 2, ordered=True))
     if args.out:
         args.out.write_text(json.dumps(results, indent=1))

@@ -271,19 +271,22 @@ def test_orientation_coordinates_flip_in_a_mirror_and_stay_under_rigid_motion(fi
     assert np.allclose(turns["mirrored"], -turns["as is"], atol=1e-6)
 
 
+def _faust_pair(faust, source: str, target: str):
+    """Two FAUST shapes prepared, their default matches and the .vts ground truth between them."""
+    from darcyan.method.pipeline import describe_shape, load_shape
+
+    config = DarcyanConfig()
+    files = faust / f"{source}.off", faust / f"{target}.off"
+    correspondence = match_shapes(*[describe_shape(f, config) for f in files], config)
+    return [load_shape(f, config, warn=False) for f in files], correspondence, vts_truth(faust, source, target)
+
+
 @pytest.mark.slow
 def test_a_person_front_and_back_are_not_swapped(faust):
     # FAUST person 2, poses 3 -> 8: with distances to the five landmarks alone the dense map put
     # the front of the body on its back over a third of it (0.42 of the vertices within 0.05,
     # orientation check -0.5); the turns between landmarks hold it (0.97, check > 0.8).
-    from darcyan.method.pipeline import describe_shape, load_shape
-
-    config = DarcyanConfig()
-    files = faust / "tr_reg_023.off", faust / "tr_reg_028.off"
-    descriptions = [describe_shape(f, config) for f in files]
-    shapes = [load_shape(f, config, warn=False) for f in files]
-    correspondence = match_shapes(*descriptions, config)
-    truth = vts_truth(faust, "tr_reg_023", "tr_reg_028")
+    shapes, correspondence, truth = _faust_pair(faust, "tr_reg_023", "tr_reg_028")
     maps = {"turns": dense_map(*shapes, correspondence),
             "distances only": dense_map(*shapes, correspondence, DenseConfig(orientation_weight=0, landmark_weight=0))}
     scores = {name: evaluate_dense(shapes[0].mesh, shapes[1].mesh, m.target, truth, target_solver=shapes[1].solver)
@@ -301,15 +304,8 @@ def test_a_mirrored_seed_is_replaced_by_the_alternative_that_keeps_the_body(faus
     # 0.05). Its alternatives include the right matching, whose first map keeps the curvature
     # signature (face, chest) better: the dense map takes it. (Measured: 0.29 within 0.05 seeded by
     # the sparse matches, 0.94 by the alternative.)
-    from darcyan.method.pipeline import describe_shape, load_shape
-
-    config = DarcyanConfig()
-    files = faust / "tr_reg_032.off", faust / "tr_reg_033.off"
-    descriptions = [describe_shape(f, config) for f in files]
-    shapes = [load_shape(f, config, warn=False) for f in files]
-    correspondence = match_shapes(*descriptions, config)
+    shapes, correspondence, truth = _faust_pair(faust, "tr_reg_032", "tr_reg_033")
     assert correspondence.alternatives  # the orientation test weighed others
-    truth = vts_truth(faust, "tr_reg_032", "tr_reg_033")
     maps = {"seeds": dense_map(*shapes, correspondence),
             "sparse only": dense_map(*shapes, correspondence, DenseConfig(candidates=1))}
     scores = {name: evaluate_dense(shapes[0].mesh, shapes[1].mesh, m.target, truth, target_solver=shapes[1].solver)

@@ -623,16 +623,12 @@ def point_signature(shape, config: DenseConfig) -> np.ndarray:
     enough to survive a change of pose, different on the front and the back of a body), on the
     coarse proxy of a large mesh."""
     from ..config import DarcyanConfig
-    from ..geometry.curvature import principal_curvatures
-    from ..method.symmetry import curvature_signature
+    from ..method.symmetry import shape_signature
 
-    describe = DarcyanConfig()
-    lengths, steps = config.signature_lengths, describe.heat.diffusion_steps
+    describe = DarcyanConfig()  # the describe stage's curvature smoothing and diffusion steps
     proxy = shape.proxy(config.basis_proxy_vertices) if config.basis_proxy_vertices > 0 else None
-    if proxy is None:
-        return curvature_signature(shape.mesh, shape.curvatures(describe.curvature_smoothing).mean, lengths, steps)
-    coarse_mean = principal_curvatures(proxy.mesh, smoothing=describe.curvature_smoothing).mean
-    return proxy.to_full(curvature_signature(proxy.mesh, coarse_mean, lengths, steps))
+    return shape_signature(shape, proxy, config.signature_lengths, describe.heat.diffusion_steps,
+                           describe.curvature_smoothing)
 
 
 def map_check(shape_1, local: np.ndarray, distances_1, distances_2, turns_1, turns_2) -> dict:

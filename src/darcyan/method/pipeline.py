@@ -20,7 +20,7 @@ import numpy as np
 
 from ..config import DarcyanConfig
 from ..errors import MeshError
-from ..geometry.curvature import Curvatures, principal_curvatures
+from ..geometry.curvature import Curvatures
 from ..geometry.geodesics import LocalGeodesicSolver
 from ..geometry.mesh import Mesh, MeshWarning
 from ..geometry.shape import Shape, prepare_shape
@@ -40,7 +40,7 @@ from .features import (
 )
 from .grid import darcyan_grids, grid_reach
 from .matching import Matches, consistent_candidates, drop_dissimilar, match_descriptors
-from .symmetry import OrientedSurface, choose_orientation, curvature_signature
+from .symmetry import OrientedSurface, choose_orientation, shape_signature
 
 
 @dataclass(frozen=True)
@@ -266,11 +266,8 @@ def _heat_kernel(shape: Shape, proxy, config: DarcyanConfig) -> np.ndarray:
 
 def _signature(shape: Shape, proxy, config: DarcyanConfig) -> np.ndarray:
     """The mirror test's point signature, on the coarse proxy when there is one."""
-    lengths, steps = config.mirror.signature_lengths, config.heat.diffusion_steps
-    if proxy is None:
-        return curvature_signature(shape.mesh, shape.curvatures(config.curvature_smoothing).mean, lengths, steps)
-    coarse_mean = principal_curvatures(proxy.mesh, smoothing=config.curvature_smoothing).mean
-    return proxy.to_full(curvature_signature(proxy.mesh, coarse_mean, lengths, steps))
+    return shape_signature(shape, proxy, config.mirror.signature_lengths, config.heat.diffusion_steps,
+                           config.curvature_smoothing)
 
 
 def feature_geodesics(vertices: np.ndarray, distances: dict) -> np.ndarray:

@@ -71,6 +71,18 @@ def curvature_signature(mesh, mean_curvature: np.ndarray, lengths=MirrorTest().s
     return np.stack(columns, axis=1)
 
 
+def shape_signature(shape, proxy, lengths, steps: int, smoothing: int) -> np.ndarray:
+    """``(n, len(lengths))`` :func:`curvature_signature` of a prepared shape (Meyer curvatures
+    after ``smoothing`` averagings, ``steps`` diffusion steps), on its coarse ``proxy`` when there
+    is one (read back at every vertex), else on the mesh itself."""
+    if proxy is None:
+        return curvature_signature(shape.mesh, shape.curvatures(smoothing).mean, lengths, steps)
+    from ..geometry.curvature import principal_curvatures
+
+    coarse_mean = principal_curvatures(proxy.mesh, smoothing=smoothing).mean
+    return proxy.to_full(curvature_signature(proxy.mesh, coarse_mean, lengths, steps))
+
+
 def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2: OrientedSurface | None,
                        test: MirrorTest = MirrorTest()):
     """Among the first ``test.candidates`` of ``candidates`` ``[(score, Matches), ...]`` (best
