@@ -7,8 +7,11 @@ import pytest
 from conftest import correct_matches, random_rotation
 
 from darcyan import DarcyanConfig, analyze_mesh
+from darcyan.geometry import synthetic
+from darcyan.geometry.geodesics import vertex_normals
 from darcyan.geometry.mesh import Mesh
-from darcyan.method.symmetry import handedness, orientation_agreement
+from darcyan.geometry.operators import mixed_voronoi_area
+from darcyan.method.symmetry import OrientedSurface, handedness, orientation_agreement
 
 
 def _same_vertex(shape_1, shape_2):
@@ -33,6 +36,36 @@ def test_orientation_agreement_is_plus_one_for_a_motion_and_minus_one_for_a_refl
         assert agreement == pytest.approx(expected, abs=0.1)
         # The same landmarks in the wrong order are no evidence of a motion.
         assert orientation_agreement(shape.surface, described.surface, landmarks_1, landmarks_2[::-1]) < 0.6
+
+
+def _ellipsoid_surface(mesh: Mesh, landmarks: np.ndarray) -> OrientedSurface:
+    """The orientation test's view of ``mesh`` with Euclidean distances to ``landmarks``."""
+    points = mesh.vertices
+    distances = np.linalg.norm(points[landmarks][:, None] - points[None], axis=2)
+    return OrientedSurface(points, vertex_normals(mesh), distances, areas=mixed_voronoi_area(mesh))
+
+
+def test_orientation_agreement_stops_only_when_the_matching_cannot_reach_what_it_needs():
+    # An ellipsoid (no symmetry but the three mirror planes) and a turned copy of it.
+    sphere = synthetic.icosphere(subdivisions=4)
+    ellipsoid = Mesh(sphere.vertices * [1.6, 1.0, 0.6], sphere.faces)
+    turned = Mesh(ellipsoid.vertices @ random_rotation(2).T, ellipsoid.faces)
+    landmarks = np.array([0, 7, 19, 40, 77])
+    surface_1, surface_2 = _ellipsoid_surface(ellipsoid, landmarks), _ellipsoid_surface(turned, landmarks)
+    same = np.arange(5)
+    assert orientation_agreement(surface_1, surface_2, same, same) == pytest.approx(1.0, abs=0.05)
+    swapped = np.array([1, 0, 3, 2, 4])  # a wrong matching: some triangles turn over, not all
+    exact = orientation_agreement(surface_1, surface_2, same, swapped)
+    assert -0.9 < exact < 0.9
+    early = 0
+    for beyond in np.linspace(-1.0, 1.0, 11):
+        found = orientation_agreement(surface_1, surface_2, same, swapped, beyond=float(beyond))
+        if exact > beyond:
+            assert found == exact  # measured to the end, to the same bits
+        else:
+            assert exact <= found <= beyond  # given up early: a bound, never above what was needed
+            early += found != exact
+    assert early  # and it does give up early
 
 
 def test_handedness_is_plus_one_for_a_turned_profile_and_minus_one_for_its_mirror_image():

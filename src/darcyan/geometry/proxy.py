@@ -62,8 +62,10 @@ class CoarseProxy:
 
 def _drop_nonmanifold_faces(faces: np.ndarray) -> np.ndarray:
     """Decimation now and then folds a few faces onto one edge; the proxy can do without them."""
-    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    _, inverse, counts = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
+    a, b = faces.ravel(), faces[:, [1, 2, 0]].ravel()
+    n = int(faces.max(initial=-1)) + 1
+    keys = np.minimum(a, b) * n + np.maximum(a, b)  # 1-D edge keys: faster than np.unique(axis=0)
+    _, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
     bad_face = (counts[inverse.ravel()] > 2).reshape(-1, 3).any(axis=1)
     return faces[~bad_face]
 

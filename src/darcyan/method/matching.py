@@ -70,13 +70,21 @@ def match_descriptors(desc_1: np.ndarray, desc_2: np.ndarray, mode: str = "neare
 def median_distance(dist: np.ndarray) -> float:
     """Median of the finite entries of a :func:`descriptor_distances` table (NaN if none): the
     scale of descriptor similarity in :func:`consistent_candidates` and of :func:`drop_dissimilar`."""
-    finite = dist[np.isfinite(dist)]
-    return float(np.median(finite)) if len(finite) else float("nan")
+    finite = dist[np.isfinite(dist)].ravel()
+    if not len(finite):
+        return float("nan")
+    # np.median's value, without the import of numpy.ma that np.median costs a cached match
+    half = len(finite) // 2
+    if len(finite) % 2:
+        return float(np.partition(finite, half)[half])
+    return float(np.mean(np.partition(finite, [half - 1, half])[half - 1:half + 1]))
 
 
-def drop_dissimilar(matches: Matches, desc_1: np.ndarray, desc_2: np.ndarray, limit: float) -> Matches:
+def drop_dissimilar(matches: Matches, desc_1: np.ndarray, desc_2: np.ndarray, limit: float,
+                    median: float | None = None) -> Matches:
     """``matches`` without those whose descriptor distance exceeds ``limit`` times the median
-    :func:`descriptor_distances` over all pairs of rows of ``desc_1`` and ``desc_2`` (0: all kept).
+    :func:`descriptor_distances` over all pairs of rows of ``desc_1`` and ``desc_2`` (0: all kept;
+    ``median``: that median, if already known).
 
     A layout-keeping matching can pair a feature point that has no counterpart on the other
     shape (a cat's ear against its nose) with whatever fits the layout; the descriptors of such
@@ -84,7 +92,9 @@ def drop_dissimilar(matches: Matches, desc_1: np.ndarray, desc_2: np.ndarray, li
     """
     if limit <= 0 or len(matches) == 0:
         return matches
-    keep = matches.distance <= limit * median_distance(descriptor_distances(desc_1, desc_2))
+    if median is None:
+        median = median_distance(descriptor_distances(desc_1, desc_2))
+    keep = matches.distance <= limit * median
     return Matches(matches.source[keep], matches.target[keep], matches.distance[keep])
 
 

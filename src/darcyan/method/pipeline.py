@@ -39,7 +39,14 @@ from .features import (
     sharpest_tips,
 )
 from .grid import darcyan_grids, grid_reach
-from .matching import Matches, consistent_candidates, drop_dissimilar, match_descriptors
+from .matching import (
+    Matches,
+    consistent_candidates,
+    descriptor_distances,
+    drop_dissimilar,
+    match_descriptors,
+    median_distance,
+)
 from .symmetry import OrientedSurface, choose_orientation, shape_signature
 
 
@@ -388,8 +395,11 @@ def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
     else:
         matches = match_descriptors(shape_1.descriptors, shape_2.descriptors, config.matching)
 
+    median = median_distance(descriptor_distances(shape_1.descriptors, shape_2.descriptors))
+
     def correspondence(matches: Matches, alternatives=()) -> Correspondence:
-        matches = drop_dissimilar(matches, shape_1.descriptors, shape_2.descriptors, config.max_match_distance)
+        matches = drop_dissimilar(matches, shape_1.descriptors, shape_2.descriptors, config.max_match_distance,
+                                  median)
         return Correspondence(shape_1.feature_vertices[matches.source], shape_2.feature_vertices[matches.target],
                               matches.distance, matches, tuple(alternatives))
 

@@ -31,6 +31,10 @@ from ..geometry.sampling import sample_vertices
 # The test's settings (sample counts, weights, the handedness levels, ...) are DarcyanConfig.mirror:
 # :class:`darcyan.config.MirrorTest`, where each is documented with how it was chosen.
 
+# Rounds of orientation_agreement's votes (how soon a matching that cannot win is given up;
+# the agreement it returns for the others is the same whatever the number).
+AGREEMENT_ROUNDS = 4
+
 
 @dataclass(frozen=True)
 class OrientedSurface:
@@ -103,7 +107,9 @@ def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2:
             score = score + float(hand[matches.source, matches.target].sum())
         if score + test.orientation_weight * len(matches) <= best_total:
             continue  # even full agreement would not beat the best so far
-        agreement = orientation_agreement(surface_1, surface_2, matches.source, matches.target, test, points)
+        needed = (best_total - score) / (test.orientation_weight * len(matches))
+        agreement = orientation_agreement(surface_1, surface_2, matches.source, matches.target, test, points,
+                                          beyond=needed)
         total = score + test.orientation_weight * agreement * len(matches)
         if total > best_total:
             best, best_total = matches, total
@@ -158,12 +164,16 @@ class MirrorTestPoints:
         neighbours: ``(s, k)`` each sample's ``k`` nearest other samples (positions in ``samples``).
         sines: ``(s * k (k - 1) / 2,)`` the signed sine of each test triangle's corner on shape 1
             (sample, then pairs of its neighbours in ``np.triu_indices`` order).
+        rounds: ``(s,)`` the round (0, 1, ...) in which :func:`orientation_agreement` looks
+            for each sample's image: the samples in slabs along shape 1's longest axis, so
+            that most triangles are complete, and vote, before the last round.
     """
 
     samples: np.ndarray
     targets: np.ndarray
     neighbours: np.ndarray
     sines: np.ndarray
+    rounds: np.ndarray
 
 
 def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface,
@@ -184,7 +194,12 @@ def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface,
     near = nearest_neighbours(surface_1.points[drawn], min(test.neighbours, len(drawn) - 1))
     p, q, r = _triangles(near)
     sines = _corner_sine(surface_1.points[drawn], surface_1.normals[drawn][p], p, q, r)
-    return MirrorTestPoints(drawn, targets, near, sines)
+    position = surface_1.points[drawn].astype(np.float64)
+    position -= position.mean(axis=0)
+    along = position @ np.linalg.eigh(position.T @ position)[1][:, -1]
+    rounds = np.empty(len(drawn), np.int64)
+    rounds[np.argsort(along, kind="stable")] = np.arange(len(drawn)) * AGREEMENT_ROUNDS // len(drawn)
+    return MirrorTestPoints(drawn, targets, near, sines, rounds)
 
 
 def _triangles(near: np.ndarray) -> tuple:
@@ -197,12 +212,17 @@ def _triangles(near: np.ndarray) -> tuple:
 
 def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface, landmarks_1: np.ndarray,
                           landmarks_2: np.ndarray, test: MirrorTest = MirrorTest(),
-                          points: MirrorTestPoints | None = None) -> float:
+                          points: MirrorTestPoints | None = None, beyond: float = -np.inf) -> float:
     """In [-1, 1]: +1 when the correspondence ``landmarks_1[i] <-> landmarks_2[i]`` (indices into
     the feature sets) preserves orientation everywhere, -1 when it is a mirror image; 0 when
     fewer than 3 landmarks make the test meaningless. ``test``: the settings (sample points,
     signature weight, ...); ``points``, the result of :func:`mirror_test_points` for ``test``,
-    saves drawing them again."""
+    saves drawing them again.
+
+    The triangles vote in ``AGREEMENT_ROUNDS`` rounds; as soon as the agreement cannot exceed
+    ``beyond`` (all the triangles still to vote agreeing), the test stops and returns that
+    bound (<= ``beyond``) instead of the agreement: a matching that cannot win is not measured
+    to the end."""
     if len(landmarks_1) < 3:
         return 0.0
     if points is None:
@@ -213,14 +233,26 @@ def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface
     if surface_1.signature is not None and surface_2.signature is not None:
         embed_1 = np.hstack([embed_1, test.signature_weight * surface_1.signature[samples]])
         embed_2 = np.hstack([embed_2, test.signature_weight * surface_2.signature[targets]])
-    image = targets[nearest_points(embed_2, embed_1)]  # each sample's image on shape 2
-    # Every triangle (sample, two of its neighbours) at once; on shape 1 they were measured once.
+    # Every triangle (sample, two of its neighbours); on shape 1 they were measured once. A
+    # triangle votes in the round that finds the last of its three corners' images.
     p, q, r = _triangles(near)
-    s1 = points.sines
-    s2 = _corner_sine(surface_2.points[image], surface_2.normals[image][p], p, q, r)
-    ok = (np.abs(s1) >= test.min_sine) & (np.abs(s2) >= test.min_sine)
-    votes = np.sign(s1[ok]) * np.sign(s2[ok])
-    return float(votes.mean()) if len(votes) else 0.0
+    ready = np.maximum(points.rounds[p], np.maximum(points.rounds[q], points.rounds[r]))
+    image = np.zeros(len(samples), np.int64)  # each sample's image on shape 2 (found in rounds)
+    votes = counted = 0  # sums of the votes (+1 kept, -1 reversed) and of the triangles that voted
+    for now in range(int(points.rounds.max(initial=-1)) + 1):
+        found = np.flatnonzero(points.rounds == now)
+        image[found] = targets[nearest_points(embed_2, embed_1[found])]
+        voting = np.flatnonzero(ready == now)
+        tp, tq, tr = p[voting], q[voting], r[voting]
+        s1 = points.sines[voting]
+        s2 = _corner_sine(surface_2.points[image], surface_2.normals[image][tp], tp, tq, tr)
+        ok = (np.abs(s1) >= test.min_sine) & (np.abs(s2) >= test.min_sine)
+        votes += int((np.sign(s1[ok]) * np.sign(s2[ok])).sum())
+        counted += int(ok.sum())
+        still = int((ready > now).sum())  # at most: they may all vote, and all agree
+        if still and (votes + still) / (counted + still) <= beyond:
+            return (votes + still) / (counted + still)
+    return votes / counted if counted else 0.0
 
 
 def _corner_sine(points, normals, p, q, r) -> np.ndarray:
