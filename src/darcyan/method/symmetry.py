@@ -107,7 +107,8 @@ def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2:
             score = score + float(hand[matches.source, matches.target].sum())
         if score + test.orientation_weight * len(matches) <= best_total:
             continue  # even full agreement would not beat the best so far
-        needed = (best_total - score) / (test.orientation_weight * len(matches))
+        scale = test.orientation_weight * len(matches)
+        needed = (best_total - score) / scale if scale > 0 else -np.inf  # the agreement that would win
         agreement = orientation_agreement(surface_1, surface_2, matches.source, matches.target, test, points,
                                           beyond=needed)
         total = score + test.orientation_weight * agreement * len(matches)
