@@ -22,9 +22,9 @@ import sys
 import warnings
 from pathlib import Path
 
-from dense_variants import prepared_pair, read_pair_lines  # the sibling script: pairs and their data
+from dense_variants import add_sample_arguments, prepared_pair, read_pair_lines  # the sibling script
 
-from darcyan.dense.maps import DenseConfig, dense_map
+from darcyan.dense.maps import DenseConfig, chosen_seed, dense_map
 from darcyan.errors import DarcyanError
 from darcyan.eval.dense_scores import evaluate_dense_maps
 from darcyan.parallel import process_map
@@ -59,8 +59,7 @@ def _score_pair(task: tuple) -> dict:
 
 def pick(seeds: list, margin: float) -> dict:
     """The rule of :func:`darcyan.dense.maps.dense_map` with ``seed_margin = margin``."""
-    best = min(seeds, key=lambda s: s["signature"])
-    return best if best["signature"] < (1.0 - margin) * seeds[0]["signature"] else seeds[0]
+    return seeds[chosen_seed([s["signature"] for s in seeds], margin)]
 
 
 def summary(results: list) -> list:
@@ -79,9 +78,7 @@ def summary(results: list) -> list:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("dataset")
-    parser.add_argument("pairs", type=Path)
-    parser.add_argument("count", type=int)
+    add_sample_arguments(parser)
     parser.add_argument("--out", type=Path, default=Path("dense-seeds.jsonl"))
     args = parser.parse_args(argv)
     try:

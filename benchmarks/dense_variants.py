@@ -65,6 +65,13 @@ def read_pair_lines(path: Path, dataset: str, count: int) -> list:
     return [(line[0].strip(), line[1].strip(), line[2].strip() if len(line) > 2 else dataset) for line in lines]
 
 
+def add_sample_arguments(parser: argparse.ArgumentParser) -> None:
+    """The arguments naming a sample of pairs (see :func:`read_pair_lines`)."""
+    parser.add_argument("dataset", help="a folder of DARCYAN_DATA (default ../shared/data), e.g. faust-5k")
+    parser.add_argument("pairs", type=Path, help="source<TAB>target[<TAB>group] lines")
+    parser.add_argument("count", type=int, help="pairs drawn from them (seed 0)")
+
+
 def score_pair(task: tuple) -> dict:
     dataset, source, target, group, variants = task
     warnings.simplefilter("ignore")
@@ -102,9 +109,7 @@ def read_variants(text: str) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("dataset")
-    parser.add_argument("pairs", type=Path)
-    parser.add_argument("count", type=int)
+    add_sample_arguments(parser)
     parser.add_argument("variants", help="JSON: name -> DenseConfig fields to change")
     parser.add_argument("--out", type=Path)
     args = parser.parse_args(argv)

@@ -23,6 +23,7 @@ import time
 from darcyan import DarcyanConfig
 from darcyan.bench.runner import default_pairs, discover_dataset, read_pairs
 from darcyan.config import DESCRIBE, PREPARE
+from darcyan.errors import DarcyanError
 from darcyan.io.cache import ShapeCache
 from darcyan.method.pipeline import describe_shapes, match_shapes
 
@@ -43,15 +44,24 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     base = DarcyanConfig()
-    changed = base.updated(json.loads(args.change), "--change")
-    if changed.fingerprint(PREPARE, DESCRIBE) != base.fingerprint(PREPARE, DESCRIBE):
-        print("--change: only settings of the match stage can be compared this way", file=sys.stderr)
+    try:
+        changes = json.loads(args.change)
+        if not isinstance(changes, dict):
+            raise DarcyanError('--change: a JSON object of settings expected, e.g. {"mirror": {"samples": 400}}')
+        changed = base.updated(changes, "--change")
+        if changed.fingerprint(PREPARE, DESCRIBE) != base.fingerprint(PREPARE, DESCRIBE):
+            raise DarcyanError("--change: only settings of the match stage can be compared this way")
+        dataset = discover_dataset(args.data)
+        pairs = read_pairs(args.pairs, dataset) if args.pairs else default_pairs(dataset)
+        names = sorted({n for pair in pairs for n in pair})
+        descriptions = dict(zip(names, describe_shapes([dataset.shapes[n] for n in names], base, False,
+                                                       ShapeCache(), args.jobs)))
+    except json.JSONDecodeError as exc:
+        print(f"same_matches.py: error: --change is not JSON ({exc})", file=sys.stderr)
         return 2
-    dataset = discover_dataset(args.data)
-    pairs = read_pairs(args.pairs, dataset) if args.pairs else default_pairs(dataset)
-    names = sorted({n for pair in pairs for n in pair})
-    descriptions = dict(zip(names, describe_shapes([dataset.shapes[n] for n in names], base, False,
-                                                   ShapeCache(), args.jobs)))
+    except DarcyanError as exc:  # config, dataset, pairs file or a mesh: each names what is wrong
+        print(f"same_matches.py: error: {exc}", file=sys.stderr)
+        return 2
     seconds = {"defaults": 0.0, "changed": 0.0}
     differ = []
     for a, b in pairs:

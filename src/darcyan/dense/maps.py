@@ -555,10 +555,16 @@ class _Seed:
 
 
 def _chosen_seed(seeds: list, margin: float) -> _Seed:
-    """The seed with the lowest signature score, unless it beats the first usable seed (the
-    sparse matching, when usable) by less than ``margin`` (relative): then that one."""
-    best = min(seeds, key=lambda s: s.signature)
-    return best if best.signature < (1.0 - margin) * seeds[0].signature else seeds[0]
+    """The seed :func:`chosen_seed` picks by the seeds' signature scores."""
+    return seeds[chosen_seed([s.signature for s in seeds], margin)]
+
+
+def chosen_seed(scores: list, margin: float) -> int:
+    """Index of the seed that seeds the map, given each usable seed's signature score (the
+    sparse matching's first, when usable): the lowest score, unless it beats the first by less
+    than ``margin`` (relative): then the first."""
+    best = min(range(len(scores)), key=lambda i: scores[i])
+    return best if scores[best] < (1.0 - margin) * scores[0] else 0
 
 
 def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple, bases: tuple) -> list:
@@ -626,9 +632,14 @@ def point_signature(shape, config: DenseConfig) -> np.ndarray:
     from ..method.symmetry import shape_signature
 
     describe = DarcyanConfig()  # the describe stage's curvature smoothing and diffusion steps
-    proxy = shape.proxy(config.basis_proxy_vertices) if config.basis_proxy_vertices > 0 else None
-    return shape_signature(shape, proxy, config.signature_lengths, describe.heat.diffusion_steps,
-                           describe.curvature_smoothing)
+
+    def compute():
+        proxy = shape.proxy(config.basis_proxy_vertices) if config.basis_proxy_vertices > 0 else None
+        return shape_signature(shape, proxy, config.signature_lengths, describe.heat.diffusion_steps,
+                               describe.curvature_smoothing)
+
+    # once per shape: --verify and the dense map, or several dense variants, score seeds alike
+    return shape.derived(("point signature", config.signature_lengths, config.basis_proxy_vertices), compute)
 
 
 def map_check(shape_1, local: np.ndarray, distances_1, distances_2, turns_1, turns_2) -> dict:

@@ -118,6 +118,11 @@ class Shape:
 
         return self._once(("proxy", vertices), lambda: coarse_proxy(self.mesh, vertices))
 
+    def derived(self, key: tuple, compute):
+        """``compute()``, once per shape and ``key``: what a higher layer derives from the shape
+        alone (e.g. the dense maps' point signature) is kept with it like its own operators."""
+        return self._once(("derived",) + tuple(key), compute)
+
     def _once(self, key: tuple, compute):
         if key not in self._memo:
             self._memo[key] = compute()
