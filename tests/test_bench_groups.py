@@ -56,5 +56,7 @@ def test_results_and_report_per_group(figures, tmp_path):
             assert g["seed_rate"] == pytest.approx(sparse["groups"][name]["rate"])
     report = (tmp_path / "out" / "report.md").read_text()
     assert "## Per group" in report and "| near | darcyan | 1 |" in report
+    seconds = [r["seconds"] for r in results["pairs"] if r["method"] == "darcyan"]
+    assert f"| {sum(seconds) / len(seconds):.2f} |" in report  # a pair's mean time, not the class's sum
     assert (tmp_path / "out" / "group_curves.png").stat().st_size > 10_000
     assert result.computed == 6  # three sparse and three dense records

@@ -71,6 +71,21 @@ def test_a_wrong_match_is_left_out_of_the_landmarks(figure_pair):
 
 
 @pytest.mark.slow
+def test_an_alternative_with_the_same_landmarks_is_not_a_rival_seed(figure_pair):
+    import dataclasses
+
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    right = tip_correspondence(tips, tips)
+    # the same matches plus one that the consistency test drops (tip 3 -> tip 0), reordered
+    same = tip_correspondence(np.concatenate([tips[::-1], [tips[3]]]), np.concatenate([tips[::-1], [tips[0]]]))
+    swapped = tip_correspondence(tips, np.roll(tips, 1))  # other landmarks: a seed of its own
+    result = dense_map(shape_1, shape_2, dataclasses.replace(right, alternatives=(same, swapped)), FAST)
+    assert result.check["seeds"] == 2 and sorted(result.check["signatures"]) == [0, 2]
+    assert result.check["seed"] == 0 and result.check["clear"]
+
+
+@pytest.mark.slow
 def test_landmarks_decide_the_map(figure_pair):
     """Matching every tip to the wrong tip gives a wrong map: the landmarks are what it follows."""
     shape_1, shape_2, _ = figure_pair
@@ -328,14 +343,14 @@ def test_a_mirrored_seed_is_replaced_by_the_alternative_that_keeps_the_body(faus
 def test_merged_zoomout_terms_measure_the_same_distances():
     # The bijectivity and orthogonality terms share one block of columns and one extra column:
     # squared distances between the embeddings must equal the sum of the four terms.
-    from darcyan.dense.maps import _embeddings
+    from darcyan.dense.maps import map_embeddings
 
     rng = np.random.default_rng(0)
     b_a, b_b = rng.normal(size=(40, 12)), rng.normal(size=(50, 12))
     c_ab, c_ba = rng.normal(size=(12, 12)), rng.normal(size=(12, 12))
     f_a, f_b = rng.normal(size=(40, 4)), rng.normal(size=(50, 4))
     for config in (DenseConfig(), DenseConfig(bijectivity=0.5, orthogonality=2.0), DenseConfig(bijectivity=0.0)):
-        q, r = _embeddings(b_a, b_b, c_ab, c_ba, config, f_a, f_b)
+        q, r = map_embeddings(b_a, b_b, c_ab, c_ba, config, f_a, f_b)
         got = ((q[:, None] - r[None]) ** 2).sum(-1)
 
         def term(x, y):
@@ -368,3 +383,22 @@ def test_functional_map_fits_equal_least_squares_with_fewer_samples_than_columns
         basis, mapped = rng.normal(size=(samples, 10)), rng.normal(size=(samples, 7))
         expected = np.linalg.lstsq(basis[:, :7], mapped, rcond=None)[0]
         assert np.allclose(_Fitter(basis).fit(mapped), expected, atol=1e-10)
+
+
+def test_landmark_coordinates_follow_the_vertices_of_a_moved_and_renumbered_copy(figure_poses):
+    from darcyan.dense.maps import landmark_coordinates
+    from darcyan.geometry.shape import prepare_shape
+
+    mesh = figure_poses[0]
+    order = np.random.default_rng(5).permutation(mesh.n_vertices)  # copy vertex i is mesh vertex order[i]
+    rotation, _ = np.linalg.qr(np.random.default_rng(6).normal(size=(3, 3)))
+    rotation *= np.sign(np.linalg.det(rotation))
+    position = np.argsort(order)  # mesh vertex v is copy vertex position[v]
+    copy = Mesh(mesh.vertices[order] @ rotation.T - 2.0, position[mesh.faces])
+    tips = np.asarray(synthetic.figure_tips())
+    shape_1, shape_2 = prepare_shape(mesh), prepare_shape(copy)
+    coords_1, coords_2 = landmark_coordinates(shape_1, shape_2, tip_correspondence(tips, position[tips]))
+    assert coords_1.shape == (mesh.n_vertices, len(tips) + len(tips) * (len(tips) - 1) // 2)
+    assert np.allclose(coords_2[position], coords_1, atol=1e-6)
+    with pytest.raises(DarcyanError, match="fewer than 3 consistent"):
+        landmark_coordinates(shape_1, shape_2, tip_correspondence(tips[:2], position[tips[:2]]))

@@ -185,7 +185,7 @@ class DenseMap:
         timings: seconds per stage.
         check: what :func:`map_check` says of the map (``orientation`` in [-1, 1], ``distortion``),
             which seed was used (``seed``: 0 the sparse matching, i its i-th alternative, of
-            ``seeds`` usable ones), its ``signature`` score, the ``runner_up``'s and every
+            ``seeds`` usable, distinct ones), its ``signature`` score, the ``runner_up``'s and every
             seed's (``signatures``: rank -> score), whether no other seed came within the
             margin (``clear``) and whether the map is ``trusted`` (see :class:`DenseConfig`).
     """
@@ -254,13 +254,14 @@ def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float
 # Spectral basis and nearest neighbours
 
 
-def _surface_sample(shape, config: DenseConfig) -> np.ndarray:
-    """``(zoomout_samples,)`` vertices drawn by area (seed ``config.seed``), sorted."""
+def zoomout_sample(shape, config: DenseConfig) -> np.ndarray:
+    """``(zoomout_samples,)`` the vertices ZoomOut iterates on, drawn by area (seed
+    ``config.seed``), sorted."""
     return np.sort(sample_vertices(shape.mesh.n_vertices, config.zoomout_samples, np.random.default_rng(config.seed),
                                    shape.vertex_areas))
 
 
-def _basis(shape, config: DenseConfig) -> np.ndarray:
+def dense_basis(shape, config: DenseConfig) -> np.ndarray:
     """``(n, basis_size)`` the shape's Laplace-Beltrami eigenvectors (built once per shape; on
     the coarse proxy of a large mesh, see ``DenseConfig.basis_proxy_vertices``)."""
     return shape.smooth_basis(min(config.basis_size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
@@ -347,11 +348,13 @@ class _Fitter:
         return self.r_inverse[:k, :k] @ (self.q[:, :k].T @ mapped)
 
 
-def _embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.ndarray,
-                config: "DenseConfig", f_a: np.ndarray | None = None,
-                f_b: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.ndarray,
+                   config: "DenseConfig", f_a: np.ndarray | None = None,
+                   f_b: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Query rows on shape a and reference rows on shape b whose nearest neighbours give the map
-    a -> b minimizing coupling, bijectivity and orthogonality residuals.
+    a -> b minimizing coupling, bijectivity and orthogonality residuals (and, with ``f_a (s_a,
+    c)``, ``f_b (s_b, c)`` the landmark coordinates, their difference weighed by
+    ``config.landmark_weight``): ``nearest_rows(references, queries)`` is the vertex map.
 
     ``c_ab (k, k)`` pulls b's coefficients back to a (``b_a C_ab ~ b_b[map]``), ``c_ba`` the
     reverse. Coupling: ``b_b[j] ~ b_a[i] C_ab``; bijectivity (``C_ab C_ba ~ I``):
@@ -384,7 +387,7 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     (s_2,)`` the reverse. For k from ``config.basis_start`` to ``config.basis_size`` by
     ``config.basis_step``: fit the k x k functional maps of both directions to the current
     vertex maps (least squares), then update both vertex maps by nearest neighbours of the
-    embeddings of :func:`_embeddings` (ZoomOut, Melzi et al. 2019, with the bijectivity and
+    embeddings of :func:`map_embeddings` (ZoomOut, Melzi et al. 2019, with the bijectivity and
     orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*, 2021).
 
     Returns ``c_12, c_21`` (``(k, k)``, the last size): ``basis_1 @ c_12 ~ basis_2[map_12]``.
@@ -398,9 +401,9 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
         b1, b2 = basis_1[:, :k], basis_2[:, :k]
         c_12, c_21 = fit_1.fit(b2[map_12]), fit_2.fit(b1[map_21])
         if i < len(sizes) - 1:
-            q, r = _embeddings(b1, b2, c_12, c_21, config, fields_1, fields_2)
+            q, r = map_embeddings(b1, b2, c_12, c_21, config, fields_1, fields_2)
             map_12 = nearest_rows(r, q)
-            q, r = _embeddings(b2, b1, c_21, c_12, config, fields_2, fields_1)
+            q, r = map_embeddings(b2, b1, c_21, c_12, config, fields_2, fields_1)
             map_21 = nearest_rows(r, q)
     return c_12, c_21
 
@@ -462,7 +465,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
                              coords_1[sample_1], coords_2[sample_2])
         k = len(c_12)
-        q, r = _embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config, coords_1, coords_2)
+        q, r = map_embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config, coords_1, coords_2)
         if mesh_2.n_vertices > config.local_search_above and len(sample_2) < mesh_2.n_vertices:
             local = nearest_rows_near(r, q, mesh_2.vertices, sample_2, config.local_search_reach)
         else:
@@ -518,13 +521,13 @@ def _choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, tim
     t = time.perf_counter()
     mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
     if 0 < config.zoomout_samples < max(mesh_1.n_vertices, mesh_2.n_vertices):
-        samples = _surface_sample(shape_1, config), _surface_sample(shape_2, config)
+        samples = zoomout_sample(shape_1, config), zoomout_sample(shape_2, config)
     else:
         samples = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
     bases = (None, None)
     if config.method == "zoomout" or config.candidates > 1:
         say("basis")
-        bases = _basis(shape_1, config), _basis(shape_2, config)
+        bases = dense_basis(shape_1, config), dense_basis(shape_2, config)
     timings["basis"] = time.perf_counter() - t
     t = time.perf_counter()
     say("landmarks")
@@ -574,28 +577,63 @@ def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple
     ``config.seed_samples`` of the samples) scored by how well its map keeps the shapes'
     :func:`point_signature`: a seed of mirrored landmarks yields a map that keeps their
     orientation only by turning the body round (front onto back), which no landmark coordinate
-    sees and the curvature of a face or a chest does."""
+    sees and the curvature of a face or a chest does. A matching whose consistent landmarks are
+    those of an earlier one is left out."""
     matchings = [correspondence] + list(getattr(correspondence, "alternatives", ()))[:max(config.candidates - 1, 0)]
     fields = ({}, {})
     seeds = []
+    seen = set()
     scoring = None
     for rank, matching in enumerate(matchings):
-        src, tgt, fields_1, fields_2 = _landmark_pairs(shape_1, shape_2, matching, config, fields)
-        if len(src) < MIN_LANDMARKS:
+        landmarks = _landmarks(shape_1, shape_2, matching, config, fields)
+        if landmarks is None:
             continue
-        turns_1, turns_2 = orientation_coordinates(shape_1, fields_1), orientation_coordinates(shape_2, fields_2)
-        # Landmark coordinates: the distances, and their turns unless weighed 0.
-        coords_1, coords_2 = fields_1, fields_2
-        if config.orientation_weight > 0:
-            coords_1 = np.hstack([fields_1, config.orientation_weight * turns_1])
-            coords_2 = np.hstack([fields_2, config.orientation_weight * turns_2])
+        # Matchings that differ only in matches the consistency test drops are one seed (the
+        # same map): counted twice, a seed would be its own runner-up and never "clear".
+        pairs = tuple(sorted(zip(landmarks[0].tolist(), landmarks[1].tolist())))
+        if pairs in seen:
+            continue
+        seen.add(pairs)
+        coords_1, coords_2 = landmarks[-2:]
         score = 0.0
         if len(matchings) > 1:
             if scoring is None:
                 scoring = _SeedScoring(shape_1, shape_2, config, samples, bases)
             score = scoring.score(coords_1, coords_2)
-        seeds.append(_Seed(rank, src, tgt, fields_1, fields_2, turns_1, turns_2, coords_1, coords_2, score))
+        seeds.append(_Seed(rank, *landmarks, score))
     return seeds
+
+
+def _landmarks(shape_1, shape_2, matching, config: DenseConfig, fields: tuple) -> tuple | None:
+    """``(source, target, fields_1, fields_2, turns_1, turns_2, coords_1, coords_2)`` of one
+    matching's consistent landmarks (``None`` below :data:`MIN_LANDMARKS`): their pairs, the
+    distances to them ``(n, k)``, their :func:`orientation_coordinates` and the landmark
+    coordinates, the distances beside the turns weighed by ``orientation_weight``."""
+    src, tgt, fields_1, fields_2 = _landmark_pairs(shape_1, shape_2, matching, config, fields)
+    if len(src) < MIN_LANDMARKS:
+        return None
+    turns_1, turns_2 = orientation_coordinates(shape_1, fields_1), orientation_coordinates(shape_2, fields_2)
+    coords_1, coords_2 = fields_1, fields_2
+    if config.orientation_weight > 0:
+        coords_1 = np.hstack([fields_1, config.orientation_weight * turns_1])
+        coords_2 = np.hstack([fields_2, config.orientation_weight * turns_2])
+    return src, tgt, fields_1, fields_2, turns_1, turns_2, coords_1, coords_2
+
+
+def landmark_coordinates(shape_1, shape_2, matching, config: DenseConfig = DenseConfig()) -> tuple:
+    """``(coords_1 (n1, c), coords_2 (n2, c))``: the landmark coordinates that a dense map seeded
+    by ``matching`` (source_vertex, target_vertex in input numbering) uses beside the spectral
+    terms (see :func:`map_embeddings`), in prepared numbering.
+
+    Raises:
+        DarcyanError: when ``matching`` has fewer than :data:`MIN_LANDMARKS` consistent matches.
+    """
+    shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
+    landmarks = _landmarks(shape_1, shape_2, matching, config, ({}, {}))
+    if landmarks is None:
+        raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: fewer than {MIN_LANDMARKS} consistent landmark "
+                           f"matches")
+    return landmarks[-2:]
 
 
 class _SeedScoring:
@@ -619,7 +657,7 @@ class _SeedScoring:
         f_1, f_2 = coords_1[p_1], coords_2[p_2]
         c_12, c_21 = zoomout(b_1, b_2, nearest_rows(f_2, f_1), nearest_rows(f_1, f_2), self.config, f_1, f_2)
         k = len(c_12)
-        q, r = _embeddings(b_1[:, :k], b_2[:, :k], c_12, c_21, self.config, f_1, f_2)
+        q, r = map_embeddings(b_1[:, :k], b_2[:, :k], c_12, c_21, self.config, f_1, f_2)
         return float(np.abs(self.signatures[0] - self.signatures[1][nearest_rows(r, q)]).mean())
 
 
