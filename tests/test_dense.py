@@ -72,8 +72,6 @@ def test_a_wrong_match_is_left_out_of_the_landmarks(figure_pair):
 
 @pytest.mark.slow
 def test_an_alternative_with_the_same_landmarks_is_not_a_rival_seed(figure_pair):
-    import dataclasses
-
     shape_1, shape_2, _ = figure_pair
     tips = synthetic.figure_tips()
     right = tip_correspondence(tips, tips)

@@ -543,7 +543,8 @@ def _choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, tim
 class _Seed:
     """One candidate matching turned into landmarks and their coordinates on both shapes
     (``(n, c)``), with the mean difference of the point signatures between source points and
-    their images under a short ZoomOut from it (``signature``, lower is better; 0 when alone)."""
+    their images under a short ZoomOut from it (``signature``, lower is better; 0 when the
+    matching has no alternatives)."""
 
     rank: int
     source: np.ndarray
