@@ -12,16 +12,16 @@ For each of N pairs drawn (seed 0) from PAIRS (``source<TAB>target[<TAB>group]``
   ``basis_size``, one by one), started from the true correspondence: what the iterations at
   the final size do to a right map;
 * ``best at k``: no iteration at all: the functional maps of size k fitted by least squares to
-  the true correspondence of every listed vertex, read out by the same final nearest-neighbour
-  step (a search over all target vertices: the dense map's own on meshes of up to
-  ``DenseConfig.local_search_above`` vertices; meant for the 5k sets). No map read out of k eigenfunctions does much better: it bounds what ZoomOut could reach
-  with this basis (and the ground truth's own rounding to vertices sets a floor under all).
+  the true correspondence of every listed vertex, read out by the dense map's own final step
+  (:func:`darcyan.dense.maps.read_out_map`). No map read out of k eigenfunctions does much
+  better: it bounds what ZoomOut could reach with this basis (and the ground truth's own
+  rounding to vertices sets a floor under all).
 
 If ``default`` is near ``zoomout from truth``, the seeds are not what is lost; the gap between
 ``last steps from truth`` and ``best at k`` is what ZoomOut's iterations lose even from a right
-map; the ``best at k`` column across sizes is what a larger basis could win. Prints per group and overall the mean over
-pairs of the share within 0.05 and of the mean error (errors capped at 1); ``--out`` keeps every
-pair's figures. Two worker processes.
+map; the ``best at k`` column across sizes is what a larger basis could win. Prints per group
+and overall the mean over pairs of the share within 0.05 and of the mean error (errors capped at
+1); ``--out`` keeps every pair's figures. Two worker processes.
 """
 
 from __future__ import annotations
@@ -41,8 +41,9 @@ from darcyan.dense.maps import (
     DenseConfig,
     dense_basis,
     dense_map,
+    input_map,
     landmark_coordinates,
-    map_embeddings,
+    read_out_map,
     zoomout,
     zoomout_sample,
 )
@@ -74,14 +75,6 @@ def true_sample_maps(shape_1, shape_2, samples: tuple, source: np.ndarray, targe
     return maps[0], maps[1]
 
 
-def local_to_input(shape_1, shape_2, local: np.ndarray) -> np.ndarray:
-    """A local map ``(n1,)`` as a map of input vertices (-1 outside the analysed mesh)."""
-    on_mesh = shape_1.mesh_index(np.arange(shape_1.n_input_vertices))
-    target = np.full(shape_1.n_input_vertices, -1, dtype=np.int64)
-    target[on_mesh >= 0] = shape_2.mesh.input_index[local[on_mesh[on_mesh >= 0]]]
-    return target
-
-
 def score_pair(task: tuple) -> dict:
     dataset, source_name, target_name, group, sizes = task
     warnings.simplefilter("ignore")
@@ -100,12 +93,15 @@ def score_pair(task: tuple) -> dict:
     samples = zoomout_sample(shape_1, config), zoomout_sample(shape_2, config)
     first_12, first_21 = true_sample_maps(shape_1, shape_2, samples, source, target)
     (s_1, s_2) = samples
+
+    def read_out(c_12, c_21, b_1, b_2):  # the dense map's own final step, in input numbering
+        local = read_out_map(shape_2, b_1, b_2, c_12, c_21, config, coords_1, coords_2, s_2)
+        return input_map(shape_1, shape_2, local)
+
     last_steps = dataclasses.replace(config, basis_start=max(config.basis_size - LAST_STEPS, 1), basis_step=1)
     for name, schedule in (("zoomout from truth", config), ("last steps from truth", last_steps)):
         c_12, c_21 = zoomout(basis_1[s_1], basis_2[s_2], first_12, first_21, schedule, coords_1[s_1], coords_2[s_2])
-        k = len(c_12)
-        q, r = map_embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config, coords_1, coords_2)
-        maps[name] = local_to_input(shape_1, shape_2, nearest_rows(r, q))
+        maps[name] = read_out(c_12, c_21, basis_1, basis_2)
 
     for size in sizes:
         sized = dataclasses.replace(config, basis_size=size)
@@ -113,8 +109,7 @@ def score_pair(task: tuple) -> dict:
         k = min(size, b_1.shape[1], b_2.shape[1])
         c_12 = np.linalg.lstsq(b_1[source, :k], b_2[target, :k], rcond=None)[0]
         c_21 = np.linalg.lstsq(b_2[target, :k], b_1[source, :k], rcond=None)[0]
-        q, r = map_embeddings(b_1[:, :k], b_2[:, :k], c_12, c_21, config, coords_1, coords_2)
-        maps[f"best at {size}"] = local_to_input(shape_1, shape_2, nearest_rows(r, q))
+        maps[f"best at {size}"] = read_out(c_12, c_21, b_1, b_2)
     scores = evaluate_dense_maps(shape_1.mesh, shape_2.mesh, maps, truth, target_solver=shape_2.solver)
     return {"pair": f"{source_name}->{target_name}", "group": group,
             **{name: {"rate": score.rate, "mean": float(np.minimum(score.errors, 1.0).mean())}

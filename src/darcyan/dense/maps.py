@@ -464,21 +464,40 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         first_21 = nearest_rows(coords_1[sample_1], coords_2[sample_2])
         c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
                              coords_1[sample_1], coords_2[sample_2])
-        k = len(c_12)
-        q, r = map_embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config, coords_1, coords_2)
-        if mesh_2.n_vertices > config.local_search_above and len(sample_2) < mesh_2.n_vertices:
-            local = nearest_rows_near(r, q, mesh_2.vertices, sample_2, config.local_search_reach)
-        else:
-            local = nearest_rows(r, q)
+        local = read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2)
         timings["zoomout"] = time.perf_counter() - t
-    target = np.full(shape_1.n_input_vertices, UNMAPPED, dtype=np.int64)
-    on_mesh = shape_1.mesh_index(np.arange(shape_1.n_input_vertices))  # welded copies included
-    target[on_mesh >= 0] = mesh_2.input_index[local[on_mesh[on_mesh >= 0]]]
+    target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([mesh_1.input_index[src], mesh_2.input_index[tgt]], axis=1)
     check = map_check(shape_1, local, fields_1, fields_2, turns_1, turns_2)
     check.update(_seed_check(seed, seeds, config.seed_margin))
     check["trusted"] = bool(check["orientation"] >= config.trust_orientation and check["clear"])
     return DenseMap(target, landmarks, timings, check)
+
+
+def read_out_map(shape_2, basis_1: np.ndarray, basis_2: np.ndarray, c_12: np.ndarray, c_21: np.ndarray,
+                 config: DenseConfig, coords_1: np.ndarray, coords_2: np.ndarray,
+                 sample_2: np.ndarray) -> np.ndarray:
+    """``(n1,)`` for every source vertex a target vertex (prepared numbering): the nearest rows of
+    the :func:`map_embeddings` of functional maps ``c_12, c_21 (k, k)`` on the bases ``(n_i,
+    >= k)`` and the landmark coordinates ``(n_i, c)``; a target mesh of more than
+    ``config.local_search_above`` vertices is searched near each image's nearest ZoomOut sample
+    (``sample_2``, see :func:`darcyan.geometry.knn.nearest_rows_near`)."""
+    k = len(c_12)
+    q, r = map_embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config, coords_1, coords_2)
+    mesh_2 = shape_2.mesh
+    if mesh_2.n_vertices > config.local_search_above and len(sample_2) < mesh_2.n_vertices:
+        return nearest_rows_near(r, q, mesh_2.vertices, sample_2, config.local_search_reach)
+    return nearest_rows(r, q)
+
+
+def input_map(shape_1, shape_2, local: np.ndarray) -> np.ndarray:
+    """``(n_input_vertices of shape_1,) int64``: a map ``local (n1,)`` between the prepared meshes
+    in the input numbering of both shapes (welded copies of a vertex mapped like it,
+    :data:`UNMAPPED` for vertices outside the analysed mesh)."""
+    target = np.full(shape_1.n_input_vertices, UNMAPPED, dtype=np.int64)
+    on_mesh = shape_1.mesh_index(np.arange(shape_1.n_input_vertices))
+    target[on_mesh >= 0] = shape_2.mesh.input_index[local[on_mesh[on_mesh >= 0]]]
+    return target
 
 
 def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig()):
