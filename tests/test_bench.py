@@ -365,3 +365,25 @@ def _installed(module: str) -> bool:
     import importlib.util
 
     return importlib.util.find_spec(module) is not None
+
+
+@pytest.mark.slow
+def test_bench_verifies_the_matchings_in_doubt(capsys, tmp_path, figures):
+    """Every darcyan record carries the orientation test's margin; with every matching in doubt
+    (verify_below 100) each is verified, as `darcyan match` would, and says so; with 0, none."""
+    pairs = tmp_path / "pairs.txt"
+    pairs.write_text("figure0\tfigure1\nfigure2\tfigure0\n")
+    for below, verified in ((100.0, True), (0.0, False)):
+        settings = tmp_path / f"verify{below:g}.json"
+        settings.write_text(json.dumps({"mirror": {"verify_below": below}}))
+        out = tmp_path / f"out{below:g}"
+        code, _, err = run(capsys, "bench", figures, "--pairs", pairs, "--config", settings, "--out", out, "-q")
+        assert code == 0, err
+        records = [json.loads(line) for line in (out / "pairs.jsonl").read_text().splitlines()]
+        assert len(records) == 2
+        for record in records:
+            assert record["margin"] is None or record["margin"] >= 0
+            assert ("verified" in record or "verify_failed" in record) == (verified and record["margin"] is not None)
+        assert any(r["margin"] is not None for r in records)  # some matching had a runner-up to doubt
+        count = sum("verified" in r for r in records)
+        assert f"verified by short dense maps: {count} pairs" in (out / "report.md").read_text()

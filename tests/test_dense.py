@@ -24,7 +24,7 @@ from darcyan.eval.dense_scores import evaluate_dense
 from darcyan.eval.metrics import GroundTruth
 from darcyan.geometry import synthetic
 from darcyan.geometry.mesh import Mesh
-from darcyan.io.mesh_files import save_mesh
+from darcyan.io.mesh_files import load_mesh, save_mesh
 from darcyan.method.pipeline import Correspondence, analyze_mesh, match_shapes
 
 # A lighter dense stage than the default, so the tests take seconds (same method).
@@ -400,3 +400,27 @@ def test_landmark_coordinates_follow_the_vertices_of_a_moved_and_renumbered_copy
     assert np.allclose(coords_2[position], coords_1, atol=1e-6)
     with pytest.raises(DarcyanError, match="fewer than 3 consistent"):
         landmark_coordinates(shape_1, shape_2, tip_correspondence(tips[:2], position[tips[:2]]))
+
+
+@pytest.mark.slow
+def test_a_matching_in_doubt_is_verified_by_default(faust, tmp_path, monkeypatch, capsys):
+    """tr_reg_016 -> tr_reg_049 (two people): the orientation test prefers a mirrored matching
+    by a margin of 0.05 (1 of 5 matches right by the vts ground truth); in doubt, the short dense
+    maps choose the right one (5 of 5). --no-verify keeps the test's choice."""
+    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
+    source, target = faust / "tr_reg_016.off", faust / "tr_reg_049.off"
+    truth = f"{faust / 'corres' / 'tr_reg_016.vts'},{faust / 'corres' / 'tr_reg_049.vts'}"
+    config = DarcyanConfig()
+    first, second = (analyze_mesh(load_mesh(p), config) for p in (source, target))
+    correspondence = match_shapes(first, second, config)
+    assert correspondence.in_doubt and correspondence.margin < config.mirror.verify_below
+    never = config.replace(mirror=dataclasses.replace(config.mirror, verify_below=0.0))
+    assert not match_shapes(first, second, never).in_doubt
+    for flag, correct in (([], "5 of 5"), (["--no-verify"], "1 of 5")):
+        assert main(["match", str(source), str(target), "--truth", truth, "-o", str(tmp_path / "m.csv"), *flag]) == 0
+        err = capsys.readouterr().err
+        assert f"{correct} matches correct" in err
+        assert ("verified (in doubt" in err) == (not flag)
+    with pytest.raises(SystemExit) as stop:  # argparse's usage error
+        main(["match", str(source), str(target), "--verify", "--no-verify"])
+    assert stop.value.code == 2 and "not allowed with" in capsys.readouterr().err

@@ -11,7 +11,8 @@ from darcyan.geometry import synthetic
 from darcyan.geometry.geodesics import vertex_normals
 from darcyan.geometry.mesh import Mesh
 from darcyan.geometry.operators import mixed_voronoi_area
-from darcyan.method.symmetry import OrientedSurface, handedness, orientation_agreement
+from darcyan.method.matching import Matches
+from darcyan.method.symmetry import OrientedSurface, handedness, orientation_agreement, weigh_orientations
 
 
 def _same_vertex(shape_1, shape_2):
@@ -66,6 +67,35 @@ def test_orientation_agreement_stops_only_when_the_matching_cannot_reach_what_it
             assert exact <= found <= beyond  # given up early: a bound, never above what was needed
             early += found != exact
     assert early  # and it does give up early
+
+
+def test_the_orientation_margin_is_the_gap_to_the_runner_up_measured_to_the_end():
+    """Brute force, every candidate's total measured to the end, against weigh_orientations'
+    early-stopping: the same choice; the margin exact below ``near``, at least ``near`` above."""
+    sphere = synthetic.icosphere(subdivisions=4)
+    ellipsoid = Mesh(sphere.vertices * [1.6, 1.0, 0.6], sphere.faces)
+    turned = Mesh(ellipsoid.vertices @ random_rotation(2).T, ellipsoid.faces)
+    landmarks = np.array([0, 7, 19, 40, 77])
+    surface_1, surface_2 = _ellipsoid_surface(ellipsoid, landmarks), _ellipsoid_surface(turned, landmarks)
+    same = np.arange(5)
+    orders = (same, np.array([1, 0, 3, 2, 4]), np.array([0, 1, 2, 4, 3]), np.array([4, 3, 2, 1, 0]))
+    test = DarcyanConfig().mirror
+    for scores in ((3.0, 3.2, 2.9, 1.0), (3.0, 5.1, 2.0, 4.9), (1.0, 1.0, 1.0, 1.0)):
+        candidates = [(s, Matches(same, target, np.zeros(5))) for s, target in zip(scores, orders)]
+        totals = np.array([s + test.orientation_weight * len(m) *
+                           orientation_agreement(surface_1, surface_2, m.source, m.target, test)
+                           for s, m in candidates])
+        best = int(np.argmax(totals))  # the first of equal totals, as the candidates are ranked
+        gap = totals[best] - np.sort(totals)[-2]
+        for near in (0.0, 0.5 * gap, gap, 2.0 * gap + 0.1, 100.0):
+            chosen, margin = weigh_orientations(candidates, surface_1, surface_2, test, near=near)
+            assert chosen is candidates[best][1]
+            if gap < near:
+                assert margin == pytest.approx(gap, abs=1e-12)
+            else:
+                assert margin >= min(near, gap) - 1e-12
+    # No surfaces, no test: the best score, and nothing to doubt.
+    assert weigh_orientations(candidates, None, None, test) == (candidates[0][1], np.inf)
 
 
 def test_handedness_is_plus_one_for_a_turned_profile_and_minus_one_for_its_mirror_image():

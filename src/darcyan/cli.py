@@ -141,17 +141,21 @@ def cmd_match(args: argparse.Namespace) -> int:
     for target, description in zip(targets, descriptions[1:]):
         correspondence = match_shapes(descriptions[0], description, config)
         shapes = score = dense = None
-        if args.dense or args.plot or args.html or args.truth or args.verify:  # prepared once for all of them
+        # A matching in doubt is verified, unless --no-verify or a dense map makes the same choice.
+        verify = args.verify or (correspondence.in_doubt and not args.no_verify and not args.dense)
+        if args.dense or args.plot or args.html or args.truth or verify:  # prepared once for all of them
             if source_shape is None:
                 source_shape = load_shape(args.source, config, args.repair, warn=False)
             shapes = [source_shape, load_shape(target, config, args.repair, warn=False)]
-        if args.verify:
+        if verify:
             from .dense.maps import DENSE_FAILURES, verified_matches
 
-            say("verifying the matches")
+            why = "" if args.verify else (f" (in doubt: the orientation test's margin {correspondence.margin:.2f} "
+                                          f"< {config.mirror.verify_below:g})")
+            say(f"verifying the matches{why}")
             try:
                 correspondence, about = verified_matches(shapes[0], shapes[1], correspondence)
-                print(f"darcyan: {target}: verified: {_seed_verdict(about)}", file=sys.stderr)
+                print(f"darcyan: {target}: verified{why}: {_seed_verdict(about)}", file=sys.stderr)
             except DENSE_FAILURES as exc:
                 print(f"darcyan: warning: {target}: the matches were not verified: {exc}", file=sys.stderr)
         if args.truth:
@@ -397,9 +401,14 @@ def build_parser() -> argparse.ArgumentParser:
                         f"geodesic layout and orientation too (default {DarcyanConfig().matching})")
     p.add_argument("--dense", action="store_true", help="write a dense map instead: CSV source_vertex,target_vertex, "
                    "one row per source vertex, seeded by the feature matches (geodesic landmark coordinates refined by ZoomOut)")
-    p.add_argument("--verify", action="store_true", help="weigh the feature matches against the other matchings the "
-                   "orientation test considered by short dense maps (which keeps the shapes' curvature better?) and "
-                   "write the winner: fixes mirrored matches of people (about 1.5 s more for 5k-vertex shapes)")
+    verify = p.add_mutually_exclusive_group()
+    verify.add_argument("--verify", action="store_true", help="weigh the feature matches against the other matchings "
+                        "the orientation test considered by short dense maps (which keeps the shapes' curvature "
+                        "better?) and write the winner: fixes mirrored matches of people (about 1.5 s more for "
+                        "5k-vertex shapes). Done by default when the test is in doubt (its margin below "
+                        "mirror.verify_below)")
+    verify.add_argument("--no-verify", action="store_true", help="never verify: the matches of the descriptors and the "
+                        "orientation test alone")
     p.add_argument("--jobs", type=int, default=2, help="processes describing the two shapes at once when neither "
                    "is in the cache (default %(default)s)")
     p.add_argument("--plot", metavar="FILE.png", help="also draw the matches side by side to a PNG (with --dense: the "

@@ -177,6 +177,12 @@ class MirrorTest:
             better than this times unrelated profiles would.
         handedness_weight: the weight of handedness, per match.
         seed: the seed of the sample points.
+        verify_below: a matching whose total (score, handedness and orientation agreement)
+            stands less than this above the runner-up's is in doubt
+            (``Correspondence.in_doubt``): where the shapes themselves are at hand (``darcyan
+            match``, ``darcyan bench``, :func:`darcyan.dense.verified_matches`), short dense maps
+            seeded by it and by the other candidates decide, as ``--verify`` does for every
+            pair. 0: never in doubt.
     """
 
     samples: int = _stage(800, MATCH)
@@ -191,6 +197,7 @@ class MirrorTest:
     profile_agreement: float = _stage(0.8, MATCH)
     handedness_weight: float = _stage(2.0, MATCH)
     seed: int = _stage(0, MATCH)
+    verify_below: float = _stage(0.25, MATCH)
 
     def __post_init__(self) -> None:
         lengths = self.signature_lengths
@@ -200,7 +207,7 @@ class MirrorTest:
         _check(self, ("samples", "neighbours", "target_points", "candidates", "profile_levels"),
                lambda v: _integer(v) and v >= 1, "a positive integer")
         _check(self, ("min_sine",), lambda v: _number(v) and 0 <= v < 1, "in [0, 1)")
-        _check(self, ("signature_weight", "orientation_weight", "handedness_weight"),
+        _check(self, ("signature_weight", "orientation_weight", "handedness_weight", "verify_below"),
                lambda v: _number(v) and v >= 0, ">= 0")
         _check(self, ("profile_agreement",), lambda v: isinstance(v, (int, float)) and v > 0,
                "positive (inf: trust every profile)")

@@ -485,9 +485,12 @@ def _sparse_records(job: dict, target: Shape) -> list:
             # max_match_distance was measured on the curvature descriptor, so other descriptors
             # keep every match.
             config = settings.config if method == "darcyan" else settings.config.replace(max_match_distance=0.0)
-            m = match_shapes(replace(src["description"], descriptors=src["descriptors"][method]),
-                             replace(tgt["description"], descriptors=tgt["descriptors"][method]),
-                             config).matches_12
+            correspondence = match_shapes(replace(src["description"], descriptors=src["descriptors"][method]),
+                                          replace(tgt["description"], descriptors=tgt["descriptors"][method]), config)
+            unverified = correspondence
+            if method == "darcyan" and correspondence.in_doubt:  # as `darcyan match` does
+                correspondence, verified = _verified(job, target, correspondence)
+            m = correspondence.matches_12
             rows, matched, distance = m.source, target_features[m.target], m.distance
         seconds = time.perf_counter() - start
         score = score_pair(target.solver, matched, true_t, sym_t, target_features, settings.threshold,
@@ -500,8 +503,32 @@ def _sparse_records(job: dict, target: Shape) -> list:
             "true_vertex": np.asarray(true_input)[rows].tolist(),
             "descriptor_distance": _json_floats(distance), "errors": _json_floats(score.errors),
             "errors_sym": _json_floats(score.errors_sym), "repeatable": score.repeatable.tolist(),
-            "repeatable_sym": score.repeatable_sym.tolist(), "seconds": seconds})
+            "repeatable_sym": score.repeatable_sym.tolist(), "seconds": seconds,
+            **({"margin": _json_floats([unverified.margin])[0]} if method == "darcyan" else {}),
+            **(verified if method == "darcyan" and unverified.in_doubt else {})})
+        if method == "darcyan" and unverified.in_doubt and unverified is not correspondence:
+            m = unverified.matches_12  # what the sparse matching alone would have scored
+            before = score_pair(target.solver, target_features[m.target], true_t, sym_t, target_features,
+                                settings.threshold, match_rows=m.source, fields=fields)
+            records[-1].update(unverified_matches=len(m.source),
+                               unverified_correct=int((before.errors <= settings.threshold).sum()))
     return records
+
+
+def _verified(job: dict, target: Shape, correspondence) -> tuple:
+    """A matching in doubt verified by short dense maps (:func:`darcyan.dense.verified_matches`):
+    the matching and what the record says of it (``verified``: the seed's rank, 0 for the sparse
+    matching; ``verify_failed`` when it could not be verified, the matching kept)."""
+    from ..dense.maps import DENSE_FAILURES, DenseConfig, verified_matches
+
+    settings: BenchSettings = job["settings"]
+    source = prepared_shape(job["source_path"], settings.repair, settings.config)
+    try:
+        chosen, about = verified_matches(source, target, correspondence, DenseConfig())
+    except DENSE_FAILURES as exc:
+        return correspondence, {"verify_failed": str(exc) if isinstance(exc, DarcyanError)
+                                else f"{type(exc).__name__}: {exc}"}
+    return chosen, {"verified": about["seed"], "verify_clear": about["clear"]}
 
 
 def _feature_truth(job: dict, target: Shape) -> tuple:
@@ -959,6 +986,12 @@ def summarize_records(records: list, threshold: float) -> dict:
             values = [c[key] for c in classes.values() if c[key] is not None]
             overall[f"{key}_class_mean"] = float(np.mean(values)) if values else None
         overall["pair_seconds"] = float(sum(r["seconds"] for r in rows))
+        if any("margin" in r for r in rows):  # darcyan: the matchings in doubt, verified by dense maps
+            overall["verified_pairs"] = sum("verified" in r for r in rows)
+            overall["verify_changed"] = sum(r.get("verified", 0) != 0 for r in rows)
+            overall["verify_failed"] = sum("verify_failed" in r for r in rows)
+            overall["correct_unverified"] = sum(r.get("unverified_correct", r["correct"]) for r in rows)
+            overall["matches_unverified"] = sum(r.get("unverified_matches", r["matches"]) for r in rows)
         groups = {g: summarize([scores[i] for i in at], threshold) for g, at in _split(rows, _group).items()}
         methods[method] = {"overall": overall, "classes": classes, "groups": groups}
     return methods
@@ -1104,6 +1137,13 @@ def report_markdown(results: dict) -> str:
                          f"{_fmt(m['overall']['recall_sym_class_mean'])}, repeatability "
                          f"{_fmt(m['overall']['repeatability_class_mean'])}. 's/pair' is the mean matching time "
                          f"of a pair (for pyfm the whole functional-map pipeline; per-shape work is cached and not counted).")
+            o = m["overall"]
+            if "verified_pairs" in o:
+                lines.append(f"\nMatchings in doubt (the orientation test's margin below `mirror.verify_below`), "
+                             f"verified by short dense maps: {o['verified_pairs']} pairs, {o['verify_changed']} "
+                             f"changed" + (f", {o['verify_failed']} could not be verified" if o["verify_failed"] else "")
+                             + f". Without it: {o['correct_unverified']} of {o['matches_unverified']} matches "
+                             f"correct; with it: {o['correct']} of {o['matches']} (the rates above).")
     lines += _dense_report(results)
     lines += _group_report(results)
     mirror = results.get("mirror", {})

@@ -47,7 +47,7 @@ from .matching import (
     match_descriptors,
     median_distance,
 )
-from .symmetry import OrientedSurface, choose_orientation, shape_signature
+from .symmetry import OrientedSurface, shape_signature, weigh_orientations
 
 
 @dataclass(frozen=True)
@@ -148,7 +148,11 @@ class Correspondence:
 
     ``source_vertex (k,)`` and ``target_vertex (k,)`` are 0-based vertex indices of the input
     files; ``distance (k,)`` the descriptor L2 distances; ``matches_12`` the same as indices into
-    the two feature sets.
+    the two feature sets; ``alternatives`` the other matchings the orientation test weighed (best
+    first). ``margin``: how far the matching's total in the orientation test stands above the
+    runner-up's (exact below ``config.mirror.verify_below``, ``inf`` without a runner-up);
+    ``in_doubt``: below it, so that short dense maps should decide
+    (:func:`darcyan.dense.verified_matches`; ``darcyan match`` and ``darcyan bench`` do).
     """
 
     source_vertex: np.ndarray
@@ -156,6 +160,8 @@ class Correspondence:
     distance: np.ndarray
     matches_12: Matches
     alternatives: tuple = ()
+    margin: float = np.inf
+    in_doubt: bool = False
 
     def __len__(self) -> int:
         return len(self.source_vertex)
@@ -387,23 +393,26 @@ def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
                  config: DarcyanConfig = DarcyanConfig()) -> Correspondence:
     """Match the feature points of ``shape_1`` to those of ``shape_2`` by descriptor distance."""
     alternatives: list = []
+    margin = np.inf
     if config.matching == "consistent":
         candidates = consistent_candidates(shape_1.descriptors, shape_2.descriptors, shape_1.feature_geodesics,
                                            shape_2.feature_geodesics, config.consistency)
-        matches = choose_orientation(candidates, shape_1.surface, shape_2.surface, config.mirror)
+        matches, margin = weigh_orientations(candidates, shape_1.surface, shape_2.surface, config.mirror,
+                                             near=config.mirror.verify_below)
         alternatives = [m for _, m in candidates[:config.mirror.candidates] if m is not matches]
     else:
         matches = match_descriptors(shape_1.descriptors, shape_2.descriptors, config.matching)
 
     median = median_distance(descriptor_distances(shape_1.descriptors, shape_2.descriptors))
 
-    def correspondence(matches: Matches, alternatives=()) -> Correspondence:
+    def correspondence(matches: Matches, alternatives=(), margin=np.inf) -> Correspondence:
         matches = drop_dissimilar(matches, shape_1.descriptors, shape_2.descriptors, config.max_match_distance,
                                   median)
         return Correspondence(shape_1.feature_vertices[matches.source], shape_2.feature_vertices[matches.target],
-                              matches.distance, matches, tuple(alternatives))
+                              matches.distance, matches, tuple(alternatives), float(margin),
+                              bool(margin < config.mirror.verify_below and alternatives))
 
-    return correspondence(matches, [correspondence(m) for m in alternatives])
+    return correspondence(matches, [correspondence(m) for m in alternatives], margin)
 
 
 def match_files(source, target, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,

@@ -89,32 +89,48 @@ def shape_signature(shape, proxy, lengths, steps: int, smoothing: int) -> np.nda
 
 def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2: OrientedSurface | None,
                        test: MirrorTest = MirrorTest()):
-    """Among the first ``test.candidates`` of ``candidates`` ``[(score, Matches), ...]`` (best
-    first, from :func:`darcyan.method.matching.consistent_candidates`), the matches with the best
-    score plus ``test.orientation_weight * orientation_agreement * len(matches)`` plus
+    """The matches :func:`weigh_orientations` chooses (without its margin)."""
+    return weigh_orientations(candidates, surface_1, surface_2, test)[0]
+
+
+def weigh_orientations(candidates, surface_1: OrientedSurface | None, surface_2: OrientedSurface | None,
+                       test: MirrorTest = MirrorTest(), near: float = 0.0) -> tuple:
+    """``(matches, margin)``: among the first ``test.candidates`` of ``candidates``
+    ``[(score, Matches), ...]`` (best first, from
+    :func:`darcyan.method.matching.consistent_candidates`), the matches with the best total: score
+    plus ``test.orientation_weight * orientation_agreement * len(matches)`` plus
     ``test.handedness_weight`` times the :func:`handedness` of its matches (when both surfaces
     carry profiles): a mirror image, whole or partial, loses against the orientation-preserving
-    matching it ties with. Without surfaces: the best score."""
+    matching it ties with. Without surfaces: the best score, margin ``inf``.
+
+    ``margin``: how far the chosen total stands above the runner-up's, exactly when it is below
+    ``near``, else some value ``>= near`` (a candidate's test stops as soon as it cannot come
+    within ``near`` of the best; ``near`` 0 measures no more than the choice needs). ``inf``
+    with one candidate.
+    """
     if surface_1 is None or surface_2 is None:
-        return candidates[0][1]
+        return candidates[0][1], np.inf
     hand = None
     if surface_1.profiles is not None and surface_2.profiles is not None:
         hand = test.handedness_weight * handedness(surface_1.profiles, surface_2.profiles, test.profile_agreement)
-    best, best_total = candidates[0][1], -np.inf
+    best, best_total, second_total = candidates[0][1], -np.inf, -np.inf
     points = mirror_test_points(surface_1, surface_2, test)  # the same for every candidate: drawn once
     for score, matches in candidates[:test.candidates]:
         if hand is not None:
             score = score + float(hand[matches.source, matches.target].sum())
-        if score + test.orientation_weight * len(matches) <= best_total:
-            continue  # even full agreement would not beat the best so far
         scale = test.orientation_weight * len(matches)
-        needed = (best_total - score) / scale if scale > 0 else -np.inf  # the agreement that would win
+        if score + scale <= best_total - near:
+            second_total = max(second_total, score + scale)  # at most this: even full agreement
+            continue  # would not come within `near` of the best so far
+        needed = (best_total - near - score) / scale if scale > 0 else -np.inf  # the agreement that would
         agreement = orientation_agreement(surface_1, surface_2, matches.source, matches.target, test, points,
-                                          beyond=needed)
-        total = score + test.orientation_weight * agreement * len(matches)
+                                          beyond=needed)  # come within `near` (a bound when it cannot)
+        total = score + scale * agreement
         if total > best_total:
-            best, best_total = matches, total
-    return best
+            best, best_total, second_total = matches, total, best_total
+        else:
+            second_total = max(second_total, total)
+    return best, best_total - second_total
 
 
 def handedness(profiles_1: np.ndarray, profiles_2: np.ndarray,
