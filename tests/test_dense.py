@@ -424,3 +424,53 @@ def test_a_matching_in_doubt_is_verified_by_default(faust, tmp_path, monkeypatch
     with pytest.raises(SystemExit) as stop:  # argparse's usage error
         main(["match", str(source), str(target), "--verify", "--no-verify"])
     assert stop.value.code == 2 and "not allowed with" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_coarse_coordinates_steer_only_the_zoomout_steps_up_to_signature_until(figure_poses):
+    # A renumbered copy: the true map is known. ZoomOut from a random first map cannot find it
+    # with 20 eigenfunctions alone; coordinates that correspond (here the positions), in the
+    # coarse steps, lead it there; and steps above signature_until ignore them exactly.
+    from darcyan.dense.maps import map_embeddings, zoomout
+    from darcyan.geometry.knn import nearest_rows
+    from darcyan.geometry.shape import prepare_shape
+
+    mesh = figure_poses[0]
+    order = np.random.default_rng(5).permutation(mesh.n_vertices)  # copy vertex i is mesh vertex order[i]
+    copy = Mesh(mesh.vertices[order], np.argsort(order)[mesh.faces])
+    basis_1, basis_2 = (prepare_shape(m).spectrum(20).vectors for m in (mesh, copy))
+    rng = np.random.default_rng(0)
+    first_12, first_21 = rng.integers(0, mesh.n_vertices, (2, mesh.n_vertices))
+    truth_12 = np.argsort(order)  # mesh vertex v is copy vertex truth_12[v]
+    size = np.ptp(mesh.vertices, axis=0).max()
+
+    def within(config, coarse):
+        c_12, c_21 = zoomout(basis_1, basis_2, first_12, first_21, config, None, None, *coarse)
+        q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config)
+        image = nearest_rows(r, q)
+        return np.mean(np.linalg.norm(copy.vertices[image] - copy.vertices[truth_12], axis=1) < 0.05 * size)
+
+    config = DenseConfig(basis_start=4, basis_size=20, basis_step=4, signature_until=20)
+    positions = (10.0 * mesh.vertices / size, 10.0 * copy.vertices / size)
+    assert within(config, positions) > 0.95
+    assert within(config, (None, None)) < 0.5
+    ignored = dataclasses.replace(config, signature_until=3)
+    assert within(ignored, positions) == within(ignored, (None, None))
+
+
+def test_signature_coordinates_have_the_configured_spread(figure_poses):
+    from darcyan.dense.maps import point_signature, signature_coordinates
+    from darcyan.geometry.shape import prepare_shape
+
+    shape_1, shape_2 = (prepare_shape(mesh) for mesh in figure_poses[:2])
+    everywhere = np.arange(shape_1.n_vertices), np.arange(shape_2.n_vertices)
+    config = DenseConfig(signature_weight=2.0)
+    coarse_1, coarse_2 = signature_coordinates(shape_1, shape_2, config, *everywhere)
+    assert np.allclose(np.concatenate([coarse_1, coarse_2]).std(axis=0), 2.0)
+    ratio = coarse_1 / point_signature(shape_1, config)  # each length scaled by one number
+    assert np.allclose(ratio, ratio[0], rtol=1e-9)
+    assert signature_coordinates(shape_1, shape_2, DenseConfig(signature_weight=0), *everywhere) == (None, None)
+    with pytest.raises(ConfigError, match="signature_weight"):
+        DenseConfig(signature_weight=-1)
+    with pytest.raises(ConfigError, match="signature_until"):
+        DenseConfig(signature_until=-1)

@@ -104,6 +104,14 @@ class DenseConfig:
         seed_basis, seed_samples: size of the short ZoomOut that scores each seed, and the
             samples it runs on.
         signature_lengths: diffusion lengths (sqrt(area)) of the mean curvature in that signature.
+        signature_weight: weight of the :func:`point_signature` (each length divided by its
+            standard deviation over both shapes) beside the other terms of the chosen seed's
+            ZoomOut steps up to ``signature_until`` eigenfunctions (0: never). At the coarse sizes
+            the landmark coordinates cannot tell which way an arm or a chest is turned, and a
+            map locks in a wrong turn there; the curvature of a face, a chest or an elbow can.
+            At the fine sizes the signature (which changes with the pose) would bias the map,
+            so it is dropped (``docs/parameters.md``).
+        signature_until: the largest basis size whose ZoomOut step uses the signature.
         seed_margin: an alternative replaces the sparse matching only when its score is lower
             by at least this share; the map is ``trusted`` (``DenseMap.check``) only when no
             other seed scores within this share of its own.
@@ -136,6 +144,8 @@ class DenseConfig:
     seed_basis: int = 30
     seed_samples: int = 1000
     signature_lengths: tuple = (0.02, 0.05, 0.1)
+    signature_weight: float = 3.0
+    signature_until: int = 50
     seed_margin: float = 0.04
     trust_orientation: float = 0.3
     local_search_above: int = 20000
@@ -154,7 +164,7 @@ class DenseConfig:
                 raise ConfigError(f"dense: {name} must be a positive integer, got {value!r}")
         if self.basis_start > self.basis_size:
             raise ConfigError(f"dense: basis_start ({self.basis_start}) exceeds basis_size ({self.basis_size})")
-        for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices"):
+        for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "signature_until"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 0:
                 raise ConfigError(f"dense: {name} must be a non-negative integer, got {value!r}")
@@ -168,7 +178,7 @@ class DenseConfig:
         if not (isinstance(self.trust_orientation, (int, float)) and -1 <= self.trust_orientation <= 1):
             raise ConfigError(f"dense: trust_orientation must be in [-1, 1], got {self.trust_orientation!r}")
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
-                     "orientation_weight", "basis_tolerance"):
+                     "orientation_weight", "basis_tolerance", "signature_weight"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value >= 0):
                 raise ConfigError(f"dense: {name} must be non-negative, got {value!r}")
@@ -379,7 +389,8 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
 
 def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21: np.ndarray,
             config: "DenseConfig", fields_1: np.ndarray | None = None,
-            fields_2: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+            fields_2: np.ndarray | None = None, coarse_1: np.ndarray | None = None,
+            coarse_2: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Bijective ZoomOut on (sampled) vertices.
 
     ``basis_i (s_i, K)``: Laplace-Beltrami eigenfunctions at the vertices taking part;
@@ -389,6 +400,8 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     vertex maps (least squares), then update both vertex maps by nearest neighbours of the
     embeddings of :func:`map_embeddings` (ZoomOut, Melzi et al. 2019, with the bijectivity and
     orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*, 2021).
+    ``coarse_i (s_i, c)``: coordinates that join the embeddings, as they are, in the steps of
+    size at most ``config.signature_until`` only (the weighted point signatures).
 
     Returns ``c_12, c_21`` (``(k, k)``, the last size): ``basis_1 @ c_12 ~ basis_2[map_12]``.
     """
@@ -401,9 +414,14 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
         b1, b2 = basis_1[:, :k], basis_2[:, :k]
         c_12, c_21 = fit_1.fit(b2[map_12]), fit_2.fit(b1[map_21])
         if i < len(sizes) - 1:
+            coarse = coarse_1 is not None and k <= config.signature_until
             q, r = map_embeddings(b1, b2, c_12, c_21, config, fields_1, fields_2)
+            if coarse:
+                q, r = np.hstack([q, coarse_1]), np.hstack([r, coarse_2])
             map_12 = nearest_rows(r, q)
             q, r = map_embeddings(b2, b1, c_21, c_12, config, fields_2, fields_1)
+            if coarse:
+                q, r = np.hstack([q, coarse_2]), np.hstack([r, coarse_1])
             map_21 = nearest_rows(r, q)
     return c_12, c_21
 
@@ -462,8 +480,9 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         say("zoomout")
         first_12 = nearest_rows(coords_2[sample_2], coords_1[sample_1])  # first maps by the landmark coordinates
         first_21 = nearest_rows(coords_1[sample_1], coords_2[sample_2])
+        coarse_1, coarse_2 = signature_coordinates(shape_1, shape_2, config, sample_1, sample_2)
         c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
-                             coords_1[sample_1], coords_2[sample_2])
+                             coords_1[sample_1], coords_2[sample_2], coarse_1, coarse_2)
         local = read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2)
         timings["zoomout"] = time.perf_counter() - t
     target = input_map(shape_1, shape_2, local)
@@ -698,6 +717,21 @@ def point_signature(shape, config: DenseConfig) -> np.ndarray:
 
     # once per shape: --verify and the dense map, or several dense variants, score seeds alike
     return shape.derived(("point signature", config.signature_lengths, config.basis_proxy_vertices), compute)
+
+
+def signature_coordinates(shape_1, shape_2, config: DenseConfig, sample_1: np.ndarray,
+                          sample_2: np.ndarray) -> tuple:
+    """``(coarse_1 (s_1, c), coarse_2 (s_2, c))``: the :func:`point_signature` at the samples,
+    each length divided by its standard deviation over both shapes' vertices and weighed by
+    ``config.signature_weight`` (``(None, None)`` at weight 0): the coordinates that join the
+    coarse ZoomOut steps (:func:`zoomout`)."""
+    if config.signature_weight <= 0:
+        return None, None
+    s_1, s_2 = point_signature(shape_1, config), point_signature(shape_2, config)
+    scale = np.concatenate([s_1, s_2]).std(axis=0)
+    scale[scale == 0] = 1.0  # a constant signature (a sphere) tells nothing: left as it is
+    weight = config.signature_weight / scale
+    return weight * s_1[sample_1], weight * s_2[sample_2]
 
 
 def map_check(shape_1, local: np.ndarray, distances_1, distances_2, turns_1, turns_2) -> dict:
