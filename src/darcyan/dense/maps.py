@@ -131,7 +131,7 @@ class DenseConfig:
     consistency: float = 0.3
     consistency_floor: float = 0.02
     basis_start: int = 10
-    basis_size: int = 100
+    basis_size: int = 120
     basis_step: int = 4
     zoomout_samples: int = 2000
     bijectivity: float = 1.0
