@@ -69,7 +69,8 @@ class DenseConfig:
         method: ``"zoomout"``: geodesic landmark coordinates, then the bijective ZoomOut below;
             ``"pyfm"``: pyFM's functional map with the landmarks as descriptors, then its ZoomOut
             (``pip install 'darcyan[pyfm]'``; slower, the ``basis_*``, ``zoomout_samples``,
-            ``bijectivity`` and ``orthogonality`` fields do not apply).
+            ``bijectivity``, ``orthogonality``, ``signature_weight`` and ``signature_until``
+            fields do not apply).
         landmarks: ``"consistent"``: keep the largest set of matches whose pairwise geodesic
             distances agree on both shapes (see ``consistency``); ``"all"``: every match.
         consistency: two matches agree when their geodesic distances on the two shapes differ by
