@@ -360,12 +360,13 @@ class _Fitter:
 
 
 def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.ndarray,
-                   config: "DenseConfig", f_a: np.ndarray | None = None,
-                   f_b: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                   config: "DenseConfig", f_a: np.ndarray | None = None, f_b: np.ndarray | None = None,
+                   g_a: np.ndarray | None = None, g_b: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Query rows on shape a and reference rows on shape b whose nearest neighbours give the map
     a -> b minimizing coupling, bijectivity and orthogonality residuals (and, with ``f_a (s_a,
     c)``, ``f_b (s_b, c)`` the landmark coordinates, their difference weighed by
-    ``config.landmark_weight``): ``nearest_rows(references, queries)`` is the vertex map.
+    ``config.landmark_weight``; with ``g_a (s_a, d)``, ``g_b (s_b, d)``, those coordinates as they
+    are): ``nearest_rows(references, queries)`` is the vertex map.
 
     ``c_ab (k, k)`` pulls b's coefficients back to a (``b_a C_ab ~ b_b[map]``), ``c_ba`` the
     reverse. Coupling: ``b_b[j] ~ b_a[i] C_ab``; bijectivity (``C_ab C_ba ~ I``):
@@ -385,6 +386,9 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
     if config.landmark_weight > 0 and f_a is not None:
         queries.append(config.landmark_weight * f_a)
         references.append(config.landmark_weight * f_b)
+    if g_a is not None:
+        queries.append(g_a)
+        references.append(g_b)
     return np.hstack(queries), np.hstack(references)
 
 
@@ -415,14 +419,10 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
         b1, b2 = basis_1[:, :k], basis_2[:, :k]
         c_12, c_21 = fit_1.fit(b2[map_12]), fit_2.fit(b1[map_21])
         if i < len(sizes) - 1:
-            coarse = coarse_1 is not None and k <= config.signature_until
-            q, r = map_embeddings(b1, b2, c_12, c_21, config, fields_1, fields_2)
-            if coarse:
-                q, r = np.hstack([q, coarse_1]), np.hstack([r, coarse_2])
+            g_1, g_2 = (coarse_1, coarse_2) if k <= config.signature_until else (None, None)
+            q, r = map_embeddings(b1, b2, c_12, c_21, config, fields_1, fields_2, g_1, g_2)
             map_12 = nearest_rows(r, q)
-            q, r = map_embeddings(b2, b1, c_21, c_12, config, fields_2, fields_1)
-            if coarse:
-                q, r = np.hstack([q, coarse_2]), np.hstack([r, coarse_1])
+            q, r = map_embeddings(b2, b1, c_21, c_12, config, fields_2, fields_1, g_2, g_1)
             map_21 = nearest_rows(r, q)
     return c_12, c_21
 
