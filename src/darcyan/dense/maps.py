@@ -146,7 +146,7 @@ class DenseConfig:
     seed_samples: int = 1000
     signature_lengths: tuple = (0.02, 0.05, 0.1)
     signature_weight: float = 3.0
-    signature_until: int = 50
+    signature_until: int = 70
     seed_margin: float = 0.04
     trust_orientation: float = 0.3
     local_search_above: int = 20000
