@@ -474,3 +474,57 @@ def test_signature_coordinates_have_the_configured_spread(figure_poses):
         DenseConfig(signature_weight=-1)
     with pytest.raises(ConfigError, match="signature_until"):
         DenseConfig(signature_until=-1)
+
+
+def test_consensus_map_keeps_the_image_two_of_three_maps_agree_on():
+    from darcyan.dense.maps import consensus_map
+
+    # Points of a helix (no two equidistant from a third by accident); the true map is the identity.
+    t = np.linspace(0, 6 * np.pi, 300)
+    positions = np.stack([np.cos(t), np.sin(t), 0.1 * t], axis=1)
+    truth = np.arange(len(t))
+    rng = np.random.default_rng(0)
+    maps = []
+    for region in (slice(0, 100), slice(100, 200), slice(200, 300)):  # each map wrong in a region of its own
+        wrong = truth.copy()
+        wrong[region] = rng.integers(0, len(t), size=len(truth[region]))
+        maps.append(wrong)
+    assert all((m != truth).mean() > 0.3 for m in maps)
+    assert np.array_equal(consensus_map(positions, maps), truth)
+    # Fewer than three maps: no majority, the first map as it is.
+    assert np.array_equal(consensus_map(positions, maps[:2]), maps[0])
+    assert np.array_equal(consensus_map(positions, maps[:1]), maps[0])
+
+
+def test_an_ensemble_of_one_sample_set_is_the_plain_map_and_its_members_differ(figure_poses):
+    from darcyan.dense.maps import zoomout_sample
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(figure_poses[0])
+    config = DenseConfig(zoomout_samples=500)
+    first, second = zoomout_sample(shape, config), zoomout_sample(shape, config, member=1)
+    assert np.array_equal(first, zoomout_sample(shape, config, member=0))  # the default draw is unchanged
+    assert np.array_equal(second, zoomout_sample(shape, config, member=1))  # seeded
+    assert len(np.intersect1d(first, second)) < 0.9 * len(first)
+    with pytest.raises(ConfigError, match="ensemble"):
+        DenseConfig(ensemble=0)
+
+
+@pytest.mark.slow
+def test_an_ensemble_maps_the_figure_at_least_as_well_as_one_run(figure_pair):
+    shape_1, shape_2, matches = figure_pair
+    one = dense_map(shape_1, shape_2, matches, FAST)
+    three = dense_map(shape_1, shape_2, matches, dataclasses.replace(FAST, ensemble=3))
+    scores = [evaluate_dense(shape_1.mesh, shape_2.mesh, m.target, sample=SCORED, target_solver=shape_2.solver)
+              for m in (one, three)]
+    assert scores[1].rate >= MIN_RATE and scores[1].mean <= MAX_MEAN
+    assert scores[1].mean <= scores[0].mean * 1.05
+    assert not np.array_equal(one.target, three.target)  # the other members took part
+
+
+def test_cli_ensemble_is_checked_before_any_work(small_pose_files, capsys):
+    assert main(["match", *map(str, small_pose_files), "--dense", "--ensemble", "0", "--no-cache"]) != 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--ensemble" in err[0] and "ensemble must be a positive integer" in err[0]
+    assert main(["match", *map(str, small_pose_files), "--ensemble", "3", "--no-cache"]) != 0
+    assert "--dense maps only" in capsys.readouterr().err

@@ -69,8 +69,8 @@ class DenseConfig:
         method: ``"zoomout"``: geodesic landmark coordinates, then the bijective ZoomOut below;
             ``"pyfm"``: pyFM's functional map with the landmarks as descriptors, then its ZoomOut
             (``pip install 'darcyan[pyfm]'``; slower, the ``basis_*``, ``zoomout_samples``,
-            ``bijectivity``, ``orthogonality``, ``signature_weight`` and ``signature_until``
-            fields do not apply).
+            ``bijectivity``, ``orthogonality``, ``signature_weight``, ``signature_until`` and
+            ``ensemble`` fields do not apply).
         landmarks: ``"consistent"``: keep the largest set of matches whose pairwise geodesic
             distances agree on both shapes (see ``consistency``); ``"all"``: every match.
         consistency: two matches agree when their geodesic distances on the two shapes differ by
@@ -81,6 +81,9 @@ class DenseConfig:
         basis_step: growth of the basis per ZoomOut iteration.
         zoomout_samples: ZoomOut iterates on this many random surface samples of each shape
             (0 = on all vertices); the final map is always computed for every source vertex.
+        ensemble: ZoomOut runs from this many independent draws of the samples (the first
+            from ``seed``), combined by :func:`consensus_map` (per source vertex the medoid of
+            the images; 1 or 2: one run, a medoid needs three).
         bijectivity, orthogonality: weights of the bijectivity (``C_12 C_21 ~ I``) and
             orthogonality (area preservation) terms beside the coupling term in ZoomOut's
             nearest-neighbour searches (0 and 0 = plain ZoomOut).
@@ -135,6 +138,7 @@ class DenseConfig:
     basis_size: int = 120
     basis_step: int = 4
     zoomout_samples: int = 2000
+    ensemble: int = 1
     bijectivity: float = 1.0
     orthogonality: float = 1.0
     landmark_weight: float = 3.0
@@ -159,7 +163,7 @@ class DenseConfig:
         if self.landmarks not in LANDMARK_MODES:
             raise ConfigError(f"dense: landmarks must be one of {LANDMARK_MODES}, got {self.landmarks!r}")
         for name in ("basis_start", "basis_size", "basis_step", "local_search_reach", "candidates", "seed_basis",
-                     "seed_samples"):
+                     "seed_samples", "ensemble"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
                 raise ConfigError(f"dense: {name} must be a positive integer, got {value!r}")
@@ -265,11 +269,12 @@ def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float
 # Spectral basis and nearest neighbours
 
 
-def zoomout_sample(shape, config: DenseConfig) -> np.ndarray:
-    """``(zoomout_samples,)`` the vertices ZoomOut iterates on, drawn by area (seed
-    ``config.seed``), sorted."""
-    return np.sort(sample_vertices(shape.mesh.n_vertices, config.zoomout_samples, np.random.default_rng(config.seed),
-                                   shape.vertex_areas))
+def zoomout_sample(shape, config: DenseConfig, member: int = 0) -> np.ndarray:
+    """``(zoomout_samples,)`` the vertices ZoomOut iterates on, drawn by area, sorted: seed
+    ``config.seed`` for the first ZoomOut, ``(config.seed, member)`` for the other members of
+    the ensemble (``config.ensemble``)."""
+    rng = np.random.default_rng(config.seed if member == 0 else (config.seed, member))
+    return np.sort(sample_vertices(shape.mesh.n_vertices, config.zoomout_samples, rng, shape.vertex_areas))
 
 
 def dense_basis(shape, config: DenseConfig) -> np.ndarray:
@@ -479,12 +484,19 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         timings["pyfm"] = time.perf_counter() - t
     else:
         say("zoomout")
-        first_12 = nearest_rows(coords_2[sample_2], coords_1[sample_1])  # first maps by the landmark coordinates
-        first_21 = nearest_rows(coords_1[sample_1], coords_2[sample_2])
-        coarse_1, coarse_2 = signature_coordinates(shape_1, shape_2, config, sample_1, sample_2)
-        c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
-                             coords_1[sample_1], coords_2[sample_2], coarse_1, coarse_2)
-        local = read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2)
+        maps = []
+        for member in range(config.ensemble if config.ensemble >= 3 else 1):  # a medoid needs three
+            if member > 0:
+                if len(sample_1) == mesh_1.n_vertices and len(sample_2) == mesh_2.n_vertices:
+                    break  # every vertex takes part: the members would be the same map
+                sample_1, sample_2 = zoomout_sample(shape_1, config, member), zoomout_sample(shape_2, config, member)
+            first_12 = nearest_rows(coords_2[sample_2], coords_1[sample_1])  # first maps by the landmark coordinates
+            first_21 = nearest_rows(coords_1[sample_1], coords_2[sample_2])
+            coarse_1, coarse_2 = signature_coordinates(shape_1, shape_2, config, sample_1, sample_2)
+            c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
+                                 coords_1[sample_1], coords_2[sample_2], coarse_1, coarse_2)
+            maps.append(read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2))
+        local = consensus_map(mesh_2.vertices, maps)
         timings["zoomout"] = time.perf_counter() - t
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([mesh_1.input_index[src], mesh_2.input_index[tgt]], axis=1)
@@ -492,6 +504,23 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     check.update(_seed_check(seed, seeds, config.seed_margin))
     check["trusted"] = bool(check["orientation"] >= config.trust_orientation and check["clear"])
     return DenseMap(target, landmarks, timings, check)
+
+
+def consensus_map(positions: np.ndarray, maps: list) -> np.ndarray:
+    """``(n1,)`` per source vertex the medoid of its images under ``maps`` (each ``(n1,)``, rows of
+    ``positions (n2, 3)``): the image with the least sum of distances to the others (the first
+    such, in the order of ``maps``). ZoomOut from different samples settles in different local
+    optima, each right over most of the body and wrong, if anywhere, in a region of its own; where
+    two of three agree, the medoid keeps them."""
+    if len(maps) < 3:
+        return maps[0]
+    images = np.stack([positions[m] for m in maps])  # (K, n1, 3)
+    spread = np.zeros((len(maps), images.shape[1]))
+    for i, j in zip(*np.triu_indices(len(maps), k=1)):
+        gap = np.linalg.norm(images[i] - images[j], axis=1)
+        spread[i] += gap
+        spread[j] += gap
+    return np.stack(maps)[np.argmin(spread, axis=0), np.arange(images.shape[1])]
 
 
 def read_out_map(shape_2, basis_1: np.ndarray, basis_2: np.ndarray, c_12: np.ndarray, c_21: np.ndarray,
