@@ -496,14 +496,13 @@ def test_consensus_map_keeps_the_image_two_of_three_maps_agree_on():
     assert np.array_equal(consensus_map(positions, maps[:1]), maps[0])
 
 
-def test_an_ensemble_of_one_sample_set_is_the_plain_map_and_its_members_differ(figure_poses):
+def test_ensemble_members_draw_seeded_samples_of_their_own(figure_poses):
     from darcyan.dense.maps import zoomout_sample
     from darcyan.geometry.shape import prepare_shape
 
     shape = prepare_shape(figure_poses[0])
     config = DenseConfig(zoomout_samples=500)
     first, second = zoomout_sample(shape, config), zoomout_sample(shape, config, member=1)
-    assert np.array_equal(first, zoomout_sample(shape, config, member=0))  # the default draw is unchanged
     assert np.array_equal(second, zoomout_sample(shape, config, member=1))  # seeded
     assert len(np.intersect1d(first, second)) < 0.9 * len(first)
     with pytest.raises(ConfigError, match="ensemble"):
@@ -520,9 +519,26 @@ def test_an_ensemble_maps_the_figure_at_least_as_well_as_one_run(figure_pair):
     assert scores[1].rate >= MIN_RATE and scores[1].mean <= MAX_MEAN
     assert scores[1].mean <= scores[0].mean * 1.05
     assert not np.array_equal(one.target, three.target)  # the other members took part
+    # Fewer than three members, or every vertex in each run: one run, the same map byte for byte.
+    two = dense_map(shape_1, shape_2, matches, dataclasses.replace(FAST, ensemble=2))
+    assert np.array_equal(two.target, one.target)
+    everywhere = dataclasses.replace(FAST, zoomout_samples=0, basis_size=20)
+    assert np.array_equal(dense_map(shape_1, shape_2, matches, dataclasses.replace(everywhere, ensemble=3)).target,
+                          dense_map(shape_1, shape_2, matches, everywhere).target)
 
 
-def test_cli_ensemble_is_checked_before_any_work(small_pose_files, capsys):
+def test_cli_ensemble_is_checked_before_any_work(small_pose_files, tmp_path, monkeypatch, capsys):
+    import darcyan.method.pipeline as pipeline
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("shapes described before the options were checked")
+
+    monkeypatch.setattr(pipeline, "describe_shapes", no_work)
+    folder = tmp_path / "maps"
+    assert main(["match", *map(str, small_pose_files), str(small_pose_files[1]), "--dense", "--ensemble", "0",
+                 "-o", str(folder)]) != 0
+    assert not folder.exists()
+    capsys.readouterr()
     assert main(["match", *map(str, small_pose_files), "--dense", "--ensemble", "0", "--no-cache"]) != 0
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--ensemble" in err[0] and "ensemble must be a positive integer" in err[0]

@@ -122,8 +122,6 @@ def cmd_match(args: argparse.Namespace) -> int:
     several = len(targets) > 1
     if several and (args.plot or args.html or args.truth):
         raise DarcyanError("--plot, --html and --truth take one target: match the targets one by one")
-    if several and args.dense:
-        _dense_folder(args.output, targets)
     dense_config = None
     if args.ensemble is not None and not args.dense:
         raise DarcyanError("--ensemble applies to --dense maps only")
@@ -134,6 +132,8 @@ def cmd_match(args: argparse.Namespace) -> int:
             dense_config = DenseConfig() if args.ensemble is None else DenseConfig(ensemble=args.ensemble)
         except ConfigError as exc:
             raise ConfigError(f"--ensemble: {exc}") from None
+    if several and args.dense:
+        _dense_folder(args.output, targets)
     form = _output_format(args)
     cache = _cache(args)
     if args.truth:
@@ -414,8 +414,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "one row per source vertex, seeded by the feature matches (geodesic landmark coordinates refined by ZoomOut)")
     p.add_argument("--ensemble", type=int, metavar="N",
                    help="with --dense: combine N ZoomOut runs from independent surface samples, per vertex the "
-                        "image two of them agree on (N >= 3; about 0.2-0.5 point more within 0.05 for 1.6x the "
-                        "dense stage's time, docs/parameters.md; default: one run)")
+                        "medoid of the N images (N >= 3; 1 or 2: one run, the default). 0.1-0.6 point more within "
+                        "0.05 for 1.5-1.7x the dense stage's time (docs/parameters.md)")
     verify = p.add_mutually_exclusive_group()
     verify.add_argument("--verify", action="store_true", help="weigh the feature matches against the other matchings "
                         "the orientation test considered by short dense maps (which keeps the shapes' curvature "
