@@ -45,7 +45,7 @@ from darcyan.dense.maps import (
     landmark_coordinates,
     read_out_map,
     zoomout,
-    zoomout_sample,
+    zoomout_samples,
 )
 from darcyan.errors import DarcyanError
 from darcyan.eval.dense_scores import evaluate_dense_maps
@@ -90,7 +90,7 @@ def score_pair(task: tuple) -> dict:
     maps = {"default": made.target}
 
     basis_1, basis_2 = dense_basis(shape_1, config), dense_basis(shape_2, config)
-    samples = zoomout_sample(shape_1, config), zoomout_sample(shape_2, config)
+    samples = zoomout_samples(shape_1, shape_2, config)  # as dense_map draws them
     first_12, first_21 = true_sample_maps(shape_1, shape_2, samples, source, target)
     (s_1, s_2) = samples
 

@@ -277,6 +277,14 @@ def zoomout_sample(shape, config: DenseConfig, member: int = 0) -> np.ndarray:
     return np.sort(sample_vertices(shape.mesh.n_vertices, config.zoomout_samples, rng, shape.vertex_areas))
 
 
+def zoomout_samples(shape_1, shape_2, config: DenseConfig, member: int = 0) -> tuple:
+    """``(sample_1, sample_2)``: both shapes' :func:`zoomout_sample` for ``member``, or every vertex
+    of both when ``config.zoomout_samples`` is 0 or covers the larger mesh."""
+    if 0 < config.zoomout_samples < max(shape_1.mesh.n_vertices, shape_2.mesh.n_vertices):
+        return zoomout_sample(shape_1, config, member), zoomout_sample(shape_2, config, member)
+    return np.arange(shape_1.mesh.n_vertices), np.arange(shape_2.mesh.n_vertices)
+
+
 def dense_basis(shape, config: DenseConfig) -> np.ndarray:
     """``(n, basis_size)`` the shape's Laplace-Beltrami eigenvectors (built once per shape; on
     the coarse proxy of a large mesh, see ``DenseConfig.basis_proxy_vertices``)."""
@@ -484,15 +492,18 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         timings["pyfm"] = time.perf_counter() - t
     else:
         say("zoomout")
+        # A medoid needs three runs; on every vertex (no draw of samples) the runs would be one map.
+        every_vertex = len(sample_1) == mesh_1.n_vertices and len(sample_2) == mesh_2.n_vertices
+        runs = config.ensemble if config.ensemble >= 3 and not every_vertex else 1
+        everywhere = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
+        signature_1, signature_2 = signature_coordinates(shape_1, shape_2, config, *everywhere)
         maps = []
-        for member in range(config.ensemble if config.ensemble >= 3 else 1):  # a medoid needs three
+        for member in range(runs):
             if member > 0:
-                if len(sample_1) == mesh_1.n_vertices and len(sample_2) == mesh_2.n_vertices:
-                    break  # every vertex takes part: the members would be the same map
-                sample_1, sample_2 = zoomout_sample(shape_1, config, member), zoomout_sample(shape_2, config, member)
+                sample_1, sample_2 = zoomout_samples(shape_1, shape_2, config, member)
             first_12 = nearest_rows(coords_2[sample_2], coords_1[sample_1])  # first maps by the landmark coordinates
             first_21 = nearest_rows(coords_1[sample_1], coords_2[sample_2])
-            coarse_1, coarse_2 = signature_coordinates(shape_1, shape_2, config, sample_1, sample_2)
+            coarse_1, coarse_2 = (None, None) if signature_1 is None else (signature_1[sample_1], signature_2[sample_2])
             c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
                                  coords_1[sample_1], coords_2[sample_2], coarse_1, coarse_2)
             maps.append(read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2))
@@ -588,10 +599,7 @@ def _choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, tim
                                f"(darcyan.load_shape(path) or darcyan.prepare_shape(mesh) gives one)")
     t = time.perf_counter()
     mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
-    if 0 < config.zoomout_samples < max(mesh_1.n_vertices, mesh_2.n_vertices):
-        samples = zoomout_sample(shape_1, config), zoomout_sample(shape_2, config)
-    else:
-        samples = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
+    samples = zoomout_samples(shape_1, shape_2, config)
     bases = (None, None)
     if config.method == "zoomout" or config.candidates > 1:
         say("basis")
