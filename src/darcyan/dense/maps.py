@@ -598,7 +598,6 @@ def _choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, tim
             raise DarcyanError(f"{shape.name}: a dense map works on prepared shapes, not on a description "
                                f"(darcyan.load_shape(path) or darcyan.prepare_shape(mesh) gives one)")
     t = time.perf_counter()
-    mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
     samples = zoomout_samples(shape_1, shape_2, config)
     bases = (None, None)
     if config.method == "zoomout" or config.candidates > 1:
