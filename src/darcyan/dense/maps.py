@@ -116,6 +116,13 @@ class DenseConfig:
             At the fine sizes the signature (which changes with the pose) would bias the map,
             so it is dropped (``docs/parameters.md``).
         signature_until: the largest basis size whose ZoomOut step uses the signature.
+        signature_turns: weight of the :func:`signature_turn_coordinates` (at each vertex, the
+            turn from the gradient of the distance to each landmark to the gradient of each
+            length of the point signature) beside the other terms of every ZoomOut step of the
+            chosen seed (0: never). Where an arm or a thigh runs between landmarks, the distances
+            to them grow along it alike on all its sides; the turn from that direction to the
+            one in which the curvature changes tells its front from its back and its inner side
+            from its outer (``docs/parameters.md``).
         seed_margin: an alternative replaces the sparse matching only when its score is lower
             by at least this share; the map is ``trusted`` (``DenseMap.check``) only when no
             other seed scores within this share of its own.
@@ -151,6 +158,7 @@ class DenseConfig:
     signature_lengths: tuple = (0.02, 0.05, 0.1)
     signature_weight: float = 3.0
     signature_until: int = 70
+    signature_turns: float = 2.0
     seed_margin: float = 0.04
     trust_orientation: float = 0.3
     local_search_above: int = 20000
@@ -183,7 +191,7 @@ class DenseConfig:
         if not (isinstance(self.trust_orientation, (int, float)) and -1 <= self.trust_orientation <= 1):
             raise ConfigError(f"dense: trust_orientation must be in [-1, 1], got {self.trust_orientation!r}")
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
-                     "orientation_weight", "basis_tolerance", "signature_weight"):
+                     "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value >= 0):
                 raise ConfigError(f"dense: {name} must be non-negative, got {value!r}")
@@ -322,19 +330,24 @@ def _landmark_pairs(shape_1, shape_2, correspondence, config: DenseConfig, field
     return src, tgt, fields_1, fields_2
 
 
-def orientation_coordinates(shape, fields: np.ndarray) -> np.ndarray:
+def orientation_coordinates(shape, fields: np.ndarray, others: np.ndarray | None = None) -> np.ndarray:
     """``(n, k (k - 1) / 2)``: at each vertex, for each two landmarks a < b, the sine of the turn
     from the gradient of the distance to a to that of the distance to b, about the outward normal
     (``fields (n, k)``: the distances). Distances to a few extremities cannot tell the front of a
     body from its back, nor left from right where the extremities sit symmetrically; these
     signs can: a reflection flips every one of them, an isometry keeps them. Averaged by area
-    from the faces to the vertices."""
+    from the faces to the vertices. With ``others (n, j)``: ``(n, k j)``, the turn from each
+    field's gradient to each of the others' instead (column ``a j + b``: field a to other b)."""
     from ..geometry.operators import face_gradients
 
     mesh = shape.mesh
     k = fields.shape[1]
-    a, b = np.triu_indices(k, k=1)
-    grads = face_gradients(mesh, fields, getattr(shape, "gradient", None))  # (m, 3, k)
+    if others is None:
+        a, b = np.triu_indices(k, k=1)
+    else:
+        a, b = np.repeat(np.arange(k), others.shape[1]), k + np.tile(np.arange(others.shape[1]), k)
+        fields = np.hstack([fields, others])
+    grads = face_gradients(mesh, fields, getattr(shape, "gradient", None))  # (m, 3, k [+ j])
     v, f = mesh.vertices, mesh.faces
     normal = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
     area = np.linalg.norm(normal, axis=1)
@@ -408,7 +421,8 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
 def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21: np.ndarray,
             config: "DenseConfig", fields_1: np.ndarray | None = None,
             fields_2: np.ndarray | None = None, coarse_1: np.ndarray | None = None,
-            coarse_2: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+            coarse_2: np.ndarray | None = None, steady_1: np.ndarray | None = None,
+            steady_2: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Bijective ZoomOut on (sampled) vertices.
 
     ``basis_i (s_i, K)``: Laplace-Beltrami eigenfunctions at the vertices taking part;
@@ -419,7 +433,8 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     embeddings of :func:`map_embeddings` (ZoomOut, Melzi et al. 2019, with the bijectivity and
     orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*, 2021).
     ``coarse_i (s_i, c)``: coordinates that join the embeddings, as they are, in the steps of
-    size at most ``config.signature_until`` only (the weighted point signatures).
+    size at most ``config.signature_until`` only (the weighted point signatures); ``steady_i (s_i,
+    t)``: coordinates that join them in every step (the weighted signature turns).
 
     Returns ``c_12, c_21`` (``(k, k)``, the last size): ``basis_1 @ c_12 ~ basis_2[map_12]``.
     """
@@ -433,11 +448,17 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
         c_12, c_21 = fit_1.fit(b2[map_12]), fit_2.fit(b1[map_21])
         if i < len(sizes) - 1:
             g_1, g_2 = (coarse_1, coarse_2) if k <= config.signature_until else (None, None)
+            g_1, g_2 = _joined(g_1, steady_1), _joined(g_2, steady_2)
             q, r = map_embeddings(b1, b2, c_12, c_21, config, fields_1, fields_2, g_1, g_2)
             map_12 = nearest_rows(r, q)
             q, r = map_embeddings(b2, b1, c_21, c_12, config, fields_2, fields_1, g_2, g_1)
             map_21 = nearest_rows(r, q)
     return c_12, c_21
+
+
+def _joined(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
+    """Columns of ``a`` beside those of ``b``, either of which may be ``None``."""
+    return b if a is None else a if b is None else np.hstack([a, b])
 
 
 def pyfm_own_map(mesh_1: Mesh, mesh_2: Mesh, n_input_vertices: int | None = None) -> DenseMap:
@@ -497,6 +518,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         runs = config.ensemble if config.ensemble >= 3 and not every_vertex else 1
         everywhere = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
         signature_1, signature_2 = signature_coordinates(shape_1, shape_2, config, *everywhere)
+        steady_1, steady_2 = signature_turn_coordinates(shape_1, shape_2, config, fields_1, fields_2)
         maps = []
         for member in range(runs):
             if member > 0:
@@ -504,8 +526,9 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             first_12 = nearest_rows(coords_2[sample_2], coords_1[sample_1])  # first maps by the landmark coordinates
             first_21 = nearest_rows(coords_1[sample_1], coords_2[sample_2])
             coarse_1, coarse_2 = (None, None) if signature_1 is None else (signature_1[sample_1], signature_2[sample_2])
+            turns = (None, None) if steady_1 is None else (steady_1[sample_1], steady_2[sample_2])
             c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
-                                 coords_1[sample_1], coords_2[sample_2], coarse_1, coarse_2)
+                                 coords_1[sample_1], coords_2[sample_2], coarse_1, coarse_2, *turns)
             maps.append(read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2))
         local = consensus_map(mesh_2.vertices, maps)
         timings["zoomout"] = time.perf_counter() - t
@@ -769,6 +792,21 @@ def signature_coordinates(shape_1, shape_2, config: DenseConfig, sample_1: np.nd
     scale[scale == 0] = 1.0  # a constant signature (a sphere) tells nothing: left as it is
     weight = config.signature_weight / scale
     return weight * s_1[sample_1], weight * s_2[sample_2]
+
+
+def signature_turn_coordinates(shape_1, shape_2, config: DenseConfig, fields_1: np.ndarray,
+                               fields_2: np.ndarray) -> tuple:
+    """``(turns_1 (n1, k l), turns_2 (n2, k l))``: at every vertex, the sine of the turn from the
+    gradient of the distance to each of the k landmarks (``fields_i (n_i, k)``) to the gradient
+    of each of the l lengths of the :func:`point_signature`, about the outward normal
+    (:func:`orientation_coordinates`), times ``config.signature_turns`` (``(None, None)`` at
+    weight 0). An isometry keeps them and a reflection flips them, like the turns between
+    landmarks; unlike those, they do not vanish along a limb, where the directions to all the
+    landmarks run along it and only the curvature tells one side of it from another."""
+    if config.signature_turns <= 0:
+        return None, None
+    return tuple(config.signature_turns * orientation_coordinates(shape, fields, point_signature(shape, config))
+                 for shape, fields in ((shape_1, fields_1), (shape_2, fields_2)))
 
 
 def map_check(shape_1, local: np.ndarray, distances_1, distances_2, turns_1, turns_2) -> dict:
