@@ -265,6 +265,65 @@ def test_orientation_coordinates_on_a_plane_are_the_sine_between_the_landmark_di
     assert (np.sign(turns[away & (np.abs(expected) > 0.2)]) == np.sign(expected[away & (np.abs(expected) > 0.2)])).all()
 
 
+def test_turns_to_other_fields_on_a_plane_are_the_sine_from_the_landmark_direction():
+    # The distance to a grows along (x - a) / |x - a|, the field y along (0, 1, 0): the turn from
+    # the first to the second about the normal is the sine of the angle between them.
+    from darcyan.dense.maps import orientation_coordinates
+
+    shape = _disc_shape()
+    v = shape.mesh.vertices
+    a = int(np.argmin(np.linalg.norm(v - [-0.3, 0.1, 0], axis=1)))
+    turns = orientation_coordinates(shape, shape.solver.distance(a)[:, None], v[:, 1:2])
+    assert turns.shape == (shape.n_vertices, 1)
+    da = v - v[a]
+    normal = shape.normals.mean(axis=0) / np.linalg.norm(shape.normals.mean(axis=0))
+    expected = np.cross(da, [0.0, 1.0, 0.0]) @ normal / (np.linalg.norm(da, axis=1) + 1e-12)
+    away = (np.linalg.norm(da, axis=1) > 0.15) & (np.linalg.norm(v[:, :2], axis=1) < 0.8 * np.abs(v[:, :2]).max())
+    error = np.abs(turns[away, 0] - expected[away])
+    assert np.median(error) < 0.03 and np.quantile(error, 0.95) < 0.1
+
+
+def test_turns_to_other_fields_are_the_pairwise_turns_in_the_documented_columns(figure_poses):
+    from darcyan.dense.maps import orientation_coordinates
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(figure_poses[0])
+    fields = np.stack([shape.solver.distance(int(t)) for t in synthetic.figure_tips()[:5]], axis=1)
+    pairwise = orientation_coordinates(shape, fields)  # columns: pairs a < b in triu order
+    pairs = list(zip(*np.triu_indices(5, k=1)))
+    crossed = orientation_coordinates(shape, fields[:, :2], fields[:, 2:])  # column a * 3 + b: field a to other b
+    for a in range(2):
+        for b in range(3):
+            assert np.allclose(crossed[:, a * 3 + b], pairwise[:, pairs.index((a, 2 + b))])
+
+
+def test_signature_turns_flip_in_a_mirror_stay_under_rigid_motion_and_scale_with_the_weight(figure_poses):
+    from darcyan.dense.maps import point_signature, signature_turn_coordinates
+    from darcyan.geometry.shape import prepare_shape
+
+    mesh = figure_poses[0]
+    tips = synthetic.figure_tips()[:3]
+    rotation, _ = np.linalg.qr(np.random.default_rng(4).normal(size=(3, 3)))
+    rotation *= np.sign(np.linalg.det(rotation))
+    copies = {"as is": mesh, "moved": Mesh(mesh.vertices @ rotation.T + 5.0, mesh.faces),
+              "mirrored": Mesh(mesh.vertices * [-1, 1, 1], mesh.faces[:, ::-1])}
+    turns = {}
+    for name, copy in copies.items():
+        shape = prepare_shape(copy)
+        fields = np.stack([shape.solver.distance(int(t)) for t in tips], axis=1)
+        turns[name] = signature_turn_coordinates(shape, shape, DenseConfig(signature_turns=2.0), fields, fields)[0]
+        if name == "as is":
+            once = signature_turn_coordinates(shape, shape, DenseConfig(signature_turns=1.0), fields, fields)[0]
+            assert turns[name].shape == (shape.n_vertices, 3 * len(point_signature(shape, DenseConfig())[0]))
+            assert np.allclose(turns[name], 2.0 * once)
+            assert signature_turn_coordinates(shape, shape, DenseConfig(signature_turns=0), fields, fields) == (None, None)
+    assert np.abs(turns["as is"]).max() > 0.5  # not vacuous: the turns are not all zero
+    assert np.allclose(turns["moved"], turns["as is"], atol=1e-6)
+    assert np.allclose(turns["mirrored"], -turns["as is"], atol=1e-6)
+    with pytest.raises(ConfigError, match="signature_turns"):
+        DenseConfig(signature_turns=-1)
+
+
 def test_orientation_coordinates_flip_in_a_mirror_and_stay_under_rigid_motion(figure_poses):
     from darcyan.dense.maps import orientation_coordinates
     from darcyan.geometry.shape import prepare_shape
@@ -444,7 +503,7 @@ def test_coarse_coordinates_steer_only_the_zoomout_steps_up_to_signature_until(f
     truth_12 = np.argsort(order)  # mesh vertex v is copy vertex truth_12[v]
     size = np.ptp(mesh.vertices, axis=0).max()
 
-    def within(config, coarse):
+    def within(config, coarse):  # coarse: (coarse_1, coarse_2[, steady_1, steady_2])
         c_12, c_21 = zoomout(basis_1, basis_2, first_12, first_21, config, None, None, *coarse)
         q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config)
         image = nearest_rows(r, q)
@@ -456,6 +515,8 @@ def test_coarse_coordinates_steer_only_the_zoomout_steps_up_to_signature_until(f
     assert within(config, (None, None)) < 0.5
     ignored = dataclasses.replace(config, signature_until=3)
     assert within(ignored, positions) == within(ignored, (None, None))
+    # Steady coordinates (the signature turns) join every step, whatever signature_until says.
+    assert within(ignored, (None, None) + positions) > 0.95
 
 
 def test_signature_coordinates_have_the_configured_spread(figure_poses):
