@@ -44,6 +44,8 @@ from darcyan.dense.maps import (
     input_map,
     landmark_coordinates,
     read_out_map,
+    signature_coordinates,
+    signature_turn_coordinates,
     zoomout,
     zoomout_samples,
 )
@@ -93,6 +95,12 @@ def score_pair(task: tuple) -> dict:
     samples = zoomout_samples(shape_1, shape_2, config)  # as dense_map draws them
     first_12, first_21 = true_sample_maps(shape_1, shape_2, samples, source, target)
     (s_1, s_2) = samples
+    # The coarse steps' signature and every step's signature turns, as dense_map adds them.
+    everywhere = np.arange(shape_1.mesh.n_vertices), np.arange(shape_2.mesh.n_vertices)
+    coarse = signature_coordinates(shape_1, shape_2, config, *everywhere)
+    k_landmarks = len(made.landmarks)  # coords: the distances to the landmarks first, then their turns
+    steady = signature_turn_coordinates(shape_1, shape_2, config, coords_1[:, :k_landmarks], coords_2[:, :k_landmarks])
+    extra = [None if c is None else c[s] for pair in (coarse, steady) for c, s in zip(pair, samples)]
 
     def read_out(c_12, c_21, b_1, b_2):  # the dense map's own final step, in input numbering
         local = read_out_map(shape_2, b_1, b_2, c_12, c_21, config, coords_1, coords_2, s_2)
@@ -100,7 +108,8 @@ def score_pair(task: tuple) -> dict:
 
     last_steps = dataclasses.replace(config, basis_start=max(config.basis_size - LAST_STEPS, 1), basis_step=1)
     for name, schedule in (("zoomout from truth", config), ("last steps from truth", last_steps)):
-        c_12, c_21 = zoomout(basis_1[s_1], basis_2[s_2], first_12, first_21, schedule, coords_1[s_1], coords_2[s_2])
+        c_12, c_21 = zoomout(basis_1[s_1], basis_2[s_2], first_12, first_21, schedule, coords_1[s_1], coords_2[s_2],
+                             *extra)
         maps[name] = read_out(c_12, c_21, basis_1, basis_2)
 
     for size in sizes:

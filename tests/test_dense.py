@@ -357,15 +357,20 @@ def _faust_pair(faust, source: str, target: str):
 def test_a_person_front_and_back_are_not_swapped(faust):
     # FAUST person 2, poses 3 -> 8: with distances to the five landmarks alone the dense map put
     # the front of the body on its back over a third of it (0.42 of the vertices within 0.05,
-    # orientation check -0.5); the turns between landmarks hold it (0.97, check > 0.8).
+    # orientation check -0.5); the turns between landmarks hold it (0.97, check > 0.8), and so do
+    # the turns from the landmark directions to the curvature's alone (a reflection flips both).
     shapes, correspondence, truth = _faust_pair(faust, "tr_reg_023", "tr_reg_028")
+    distances_only = DenseConfig(orientation_weight=0, landmark_weight=0, signature_turns=0)
     maps = {"turns": dense_map(*shapes, correspondence),
-            "distances only": dense_map(*shapes, correspondence, DenseConfig(orientation_weight=0, landmark_weight=0))}
+            "distances only": dense_map(*shapes, correspondence, distances_only),
+            "signature turns": dense_map(*shapes, correspondence,
+                                         dataclasses.replace(distances_only, signature_turns=2.0))}
     scores = {name: evaluate_dense(shapes[0].mesh, shapes[1].mesh, m.target, truth, target_solver=shapes[1].solver)
               for name, m in maps.items()}
     assert scores["turns"].rate >= 0.9 and scores["turns"].mean <= 0.025
     assert maps["turns"].check["orientation"] > 0.7
-    # the check sees the flip of the other map
+    assert scores["signature turns"].rate >= 0.9
+    # the check sees the flip of the distances-only map
     assert scores["distances only"].rate < 0.6 and maps["distances only"].check["orientation"] < 0
 
 
