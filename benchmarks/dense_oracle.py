@@ -103,7 +103,7 @@ def score_pair(task: tuple) -> dict:
     extra = [None if c is None else c[s] for pair in (coarse, steady) for c, s in zip(pair, samples)]
 
     def read_out(c_12, c_21, b_1, b_2):  # the dense map's own final step, in input numbering
-        local = read_out_map(shape_2, b_1, b_2, c_12, c_21, config, coords_1, coords_2, s_2)
+        local = read_out_map(shape_2, b_1, b_2, c_12, c_21, config, coords_1, coords_2, s_2, *steady)
         return input_map(shape_1, shape_2, local)
 
     last_steps = dataclasses.replace(config, basis_start=max(config.basis_size - LAST_STEPS, 1), basis_step=1)

@@ -524,6 +524,26 @@ def test_coarse_coordinates_steer_only_the_zoomout_steps_up_to_signature_until(f
     assert within(ignored, (None, None) + positions) > 0.95
 
 
+def test_the_final_read_out_carries_the_steady_coordinates(figure_poses):
+    # A renumbered copy, functional maps that say nothing (zero): coordinates that correspond (the
+    # positions, scaled to dominate) give the true map exactly; without them the map is not it.
+    from darcyan.dense.maps import read_out_map
+    from darcyan.geometry.shape import prepare_shape
+
+    mesh = figure_poses[0]
+    order = np.random.default_rng(6).permutation(mesh.n_vertices)
+    shape, copy = prepare_shape(mesh), prepare_shape(Mesh(mesh.vertices[order], np.argsort(order)[mesh.faces]))
+    basis_1, basis_2 = shape.spectrum(10).vectors, copy.spectrum(10).vectors
+    zero = np.zeros((10, 10))
+    config = DenseConfig(basis_size=10, bijectivity=0, orthogonality=0, landmark_weight=0)
+    no_landmarks = np.zeros((mesh.n_vertices, 0)), np.zeros((copy.n_vertices, 0))
+    args = (copy, basis_1, basis_2, zero, zero, config, *no_landmarks, np.arange(copy.n_vertices))
+    truth = np.argsort(order)
+    steady = 1e3 * shape.mesh.vertices, 1e3 * copy.mesh.vertices
+    assert (read_out_map(*args, *steady) == truth).all()
+    assert (read_out_map(*args) != truth).mean() > 0.5
+
+
 def test_signature_coordinates_have_the_configured_spread(figure_poses):
     from darcyan.dense.maps import point_signature, signature_coordinates
     from darcyan.geometry.shape import prepare_shape

@@ -119,7 +119,7 @@ class DenseConfig:
         signature_turns: weight of the :func:`signature_turn_coordinates` (at each vertex, the
             turn from the gradient of the distance to each landmark to the gradient of each
             length of the point signature) beside the other terms of every ZoomOut step of the
-            chosen seed (0: never). Where an arm or a thigh runs between landmarks, the distances
+            chosen seed and of the final read-out (0: never). Where an arm or a thigh runs between landmarks, the distances
             to them grow along it alike on all its sides; the turn from that direction to the
             one in which the curvature changes tells its front from its back and its inner side
             from its outer (``docs/parameters.md``).
@@ -529,7 +529,8 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             turns = (None, None) if steady_1 is None else (steady_1[sample_1], steady_2[sample_2])
             c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
                                  coords_1[sample_1], coords_2[sample_2], coarse_1, coarse_2, *turns)
-            maps.append(read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2))
+            maps.append(read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2,
+                                     steady_1, steady_2))
         local = consensus_map(mesh_2.vertices, maps)
         timings["zoomout"] = time.perf_counter() - t
     target = input_map(shape_1, shape_2, local)
@@ -559,14 +560,16 @@ def consensus_map(positions: np.ndarray, maps: list) -> np.ndarray:
 
 def read_out_map(shape_2, basis_1: np.ndarray, basis_2: np.ndarray, c_12: np.ndarray, c_21: np.ndarray,
                  config: DenseConfig, coords_1: np.ndarray, coords_2: np.ndarray,
-                 sample_2: np.ndarray) -> np.ndarray:
+                 sample_2: np.ndarray, steady_1: np.ndarray | None = None,
+                 steady_2: np.ndarray | None = None) -> np.ndarray:
     """``(n1,)`` for every source vertex a target vertex (prepared numbering): the nearest rows of
     the :func:`map_embeddings` of functional maps ``c_12, c_21 (k, k)`` on the bases ``(n_i,
-    >= k)`` and the landmark coordinates ``(n_i, c)``; a target mesh of more than
+    >= k)``, the landmark coordinates ``(n_i, c)`` and, as they are, ``steady_i (n_i, t)`` (the
+    weighted signature turns, when given); a target mesh of more than
     ``config.local_search_above`` vertices is searched near each image's nearest ZoomOut sample
     (``sample_2``, see :func:`darcyan.geometry.knn.nearest_rows_near`)."""
     k = len(c_12)
-    q, r = map_embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config, coords_1, coords_2)
+    q, r = map_embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config, coords_1, coords_2, steady_1, steady_2)
     mesh_2 = shape_2.mesh
     if mesh_2.n_vertices > config.local_search_above and len(sample_2) < mesh_2.n_vertices:
         return nearest_rows_near(r, q, mesh_2.vertices, sample_2, config.local_search_reach)
