@@ -18,7 +18,9 @@ sparse stage weighed (``Correspondence.alternatives``): each seeds a short ZoomO
 whose map best keeps a curvature signature seeds the dense map (a mirrored seed keeps every
 distance and, with the orientation coordinates, turns the body round: front onto back, which
 the curvature of a face or a chest shows). ``DenseMap.check`` says which seed was used and
-whether the map is trusted.
+whether the map is trusted. Beside the spectral terms, ZoomOut's steps carry the landmark
+coordinates (distances and their turns), the curvature signature in the coarse steps, and the
+turns from the landmark directions to the signature's (:func:`signature_turn_coordinates`).
 
 Large meshes: the basis is computed on a decimated proxy and interpolated, and the final map
 searches each image near its nearest ZoomOut sample (:func:`darcyan.geometry.knn.nearest_rows_near`).
@@ -119,10 +121,9 @@ class DenseConfig:
         signature_turns: weight of the :func:`signature_turn_coordinates` (at each vertex, the
             turn from the gradient of the distance to each landmark to the gradient of each
             length of the point signature) beside the other terms of every ZoomOut step of the
-            chosen seed and of the final read-out (0: never). Where an arm or a thigh runs between landmarks, the distances
-            to them grow along it alike on all its sides; the turn from that direction to the
-            one in which the curvature changes tells its front from its back and its inner side
-            from its outer (``docs/parameters.md``).
+            chosen seed and of the final read-out (0: never). Along a limb the distances to all
+            the landmarks grow alike on all its sides; the turn from that direction to the one in
+            which the curvature changes differs from one side to another (``docs/parameters.md``).
         seed_margin: an alternative replaces the sparse matching only when its score is lower
             by at least this share; the map is ``trusted`` (``DenseMap.check``) only when no
             other seed scores within this share of its own.
