@@ -297,20 +297,28 @@ def test_turns_to_other_fields_are_the_pairwise_turns_in_the_documented_columns(
             assert np.allclose(crossed[:, a * 3 + b], pairwise[:, pairs.index((a, 2 + b))])
 
 
-def test_signature_turns_flip_in_a_mirror_stay_under_rigid_motion_and_scale_with_the_weight(figure_poses):
-    from darcyan.dense.maps import point_signature, signature_turn_coordinates
+def _moved_and_mirrored_tip_fields(mesh, seed: int):
+    """``[(name, shape, fields)]`` for ``mesh`` as is, moved rigidly (a seeded rotation and a shift)
+    and mirrored: each prepared, with its distances ``(n, 3)`` to three of the figure's tips."""
     from darcyan.geometry.shape import prepare_shape
 
-    mesh = figure_poses[0]
-    tips = synthetic.figure_tips()[:3]
-    rotation, _ = np.linalg.qr(np.random.default_rng(4).normal(size=(3, 3)))
+    rotation, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
     rotation *= np.sign(np.linalg.det(rotation))
     copies = {"as is": mesh, "moved": Mesh(mesh.vertices @ rotation.T + 5.0, mesh.faces),
               "mirrored": Mesh(mesh.vertices * [-1, 1, 1], mesh.faces[:, ::-1])}
-    turns = {}
+    tips = synthetic.figure_tips()[:3]
+    out = []
     for name, copy in copies.items():
         shape = prepare_shape(copy)
-        fields = np.stack([shape.solver.distance(int(t)) for t in tips], axis=1)
+        out.append((name, shape, np.stack([shape.solver.distance(int(t)) for t in tips], axis=1)))
+    return out
+
+
+def test_signature_turns_flip_in_a_mirror_stay_under_rigid_motion_and_scale_with_the_weight(figure_poses):
+    from darcyan.dense.maps import point_signature, signature_turn_coordinates
+
+    turns = {}
+    for name, shape, fields in _moved_and_mirrored_tip_fields(figure_poses[0], seed=4):
         turns[name] = signature_turn_coordinates(shape, shape, DenseConfig(signature_turns=2.0), fields, fields)[0]
         if name == "as is":
             once = signature_turn_coordinates(shape, shape, DenseConfig(signature_turns=1.0), fields, fields)[0]
@@ -326,19 +334,9 @@ def test_signature_turns_flip_in_a_mirror_stay_under_rigid_motion_and_scale_with
 
 def test_orientation_coordinates_flip_in_a_mirror_and_stay_under_rigid_motion(figure_poses):
     from darcyan.dense.maps import orientation_coordinates
-    from darcyan.geometry.shape import prepare_shape
 
-    mesh = figure_poses[0]
-    tips = synthetic.figure_tips()[:3]
-    rotation, _ = np.linalg.qr(np.random.default_rng(3).normal(size=(3, 3)))
-    rotation *= np.sign(np.linalg.det(rotation))
-    copies = {"as is": mesh, "moved": Mesh(mesh.vertices @ rotation.T + 5.0, mesh.faces),
-              "mirrored": Mesh(mesh.vertices * [-1, 1, 1], mesh.faces[:, ::-1])}
-    turns = {}
-    for name, copy in copies.items():
-        shape = prepare_shape(copy)
-        fields = np.stack([shape.solver.distance(int(t)) for t in tips], axis=1)
-        turns[name] = orientation_coordinates(shape, fields)
+    turns = {name: orientation_coordinates(shape, fields)
+             for name, shape, fields in _moved_and_mirrored_tip_fields(figure_poses[0], seed=3)}
     assert np.allclose(turns["moved"], turns["as is"], atol=1e-6)
     assert np.allclose(turns["mirrored"], -turns["as is"], atol=1e-6)
 
