@@ -19,9 +19,10 @@ import pytest
 
 from darcyan import MeshError, MeshWarning, analyze_mesh
 from darcyan.cli import main
+from darcyan.config import Repairing
 from darcyan.geometry import synthetic
 from darcyan.geometry.mesh import Mesh, _edge_counts
-from darcyan.geometry.repair import nonmanifold_vertices, prepare_mesh, split_nonmanifold
+from darcyan.geometry.repair import nonmanifold_vertices, prepare_mesh, split_nonmanifold, weld_vertices
 from darcyan.io.mesh_files import load_mesh, save_mesh
 
 
@@ -120,6 +121,24 @@ def test_soup_is_refused_without_repair_and_welded_back_with_it(tosca):
     np.testing.assert_array_equal(soupy.vertices[analysis.feature_vertices],
                                   mesh.vertices[original.feature_vertices])
     np.testing.assert_allclose(analysis.feature_agd, original.feature_agd, rtol=1e-6)
+
+
+def test_weld_tolerance_zero_never_welds():
+    # A plane's strip of 2 x 2 squares cut along its middle column of vertices: the copies sit
+    # exactly on the originals, on the boundary; the default welds them, 0 leaves them.
+    grid = np.array([[x, y, 0.0] for y in range(3) for x in range(3)], dtype=np.float64)
+    left = np.array([[0, 1, 4], [0, 4, 3], [3, 4, 7], [3, 7, 6]])
+    right = np.array([[1, 2, 5], [1, 5, 4], [4, 5, 8], [4, 8, 7]])
+    vertices = np.vstack([grid, grid[[1, 4, 7]]])  # copies 9, 10, 11 of the middle column
+    copy = {1: 9, 4: 10, 7: 11}
+    faces = np.vstack([left, np.vectorize(lambda v: copy.get(v, v))(right)])
+    cut = Mesh(vertices, faces, "cut")
+    welded = weld_vertices(cut)
+    assert welded.n_vertices == 9 and sorted(welded.input_index) == list(range(9))
+    assert weld_vertices(cut, 0.0) is cut
+    with pytest.warns(MeshWarning, match="component"):  # the halves stay apart: one is kept
+        kept, changes = prepare_mesh(cut, repair=True, settings=Repairing(weld_tolerance=0.0))
+    assert kept.n_vertices == 6 and not any("welded" in c for c in changes)
 
 
 def test_soup_is_one_error_line_on_the_command_line(capsys, tmp_path):

@@ -67,7 +67,7 @@ class Repairing:
     Attributes:
         weld_tolerance: boundary vertices closer than this fraction of the mean edge length are
             one point: copies of a vertex written by one program agree to the last digits, real
-            edges are ~1e6 times longer.
+            edges are ~1e6 times longer. 0: never weld.
         degenerate_area: a face whose area is below this fraction of the mean face area is
             degenerate (dropped under repair, refused without).
     """

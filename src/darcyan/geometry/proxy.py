@@ -13,6 +13,7 @@ import warnings
 
 import numpy as np
 
+from ..config import Repairing
 from ..errors import DarcyanError
 from .geodesics import GeodesicSolver, interpolate
 from .mesh import Mesh
@@ -44,7 +45,10 @@ class CoarseProxy:
             f = f[~np.isin(f, bow_ties).any(axis=1)]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # a sliver component dropped by decimation is no news
-            self.mesh, _ = prepare_mesh(Mesh(v, f, name=f"{full.name} (decimated)"), repair=True)
+            # Never welded: decimation merges vertices, it leaves no copies of one (none were
+            # welded on any tosca-hires proxy), and the search would import scipy.spatial, 0.2 s.
+            self.mesh, _ = prepare_mesh(Mesh(v, f, name=f"{full.name} (decimated)"), repair=True,
+                                        settings=Repairing(weld_tolerance=0.0))
         self.solver = GeodesicSolver(self.mesh)
         self._faces, self._bary = self.solver.locate(full.vertices)
 

@@ -170,10 +170,10 @@ def weld_vertices(mesh: Mesh, tolerance: float = Repairing().weld_tolerance) -> 
     welding them would pinch it. Each group of coincident vertices (chained: within tolerance of
     one another) becomes its member of smallest ``input_index``, which keeps its position and
     index; the others are dropped and their faces renumbered (faces this collapses are left to
-    :func:`inspect_mesh`). Returns ``mesh`` itself when nothing is welded.
+    :func:`inspect_mesh`). Returns ``mesh`` itself when nothing is welded, or ``tolerance`` is 0.
     """
     open_ = np.flatnonzero(boundary_vertices(mesh))
-    if not len(open_):
+    if not len(open_) or tolerance <= 0:
         return mesh  # closed: nothing to weld (and no need to import scipy.spatial, 0.1-0.2 s)
     import scipy.sparse as sp
     from scipy.sparse.csgraph import connected_components
