@@ -421,6 +421,49 @@ def test_merged_zoomout_terms_measure_the_same_distances():
         assert np.allclose(got, want, rtol=1e-10, atol=1e-9)
 
 
+def test_rectangular_zoomout_terms_measure_the_same_distances():
+    # With a margin the maps are (p, k): each term compares the columns the docstring names.
+    from darcyan.dense.maps import map_embeddings
+
+    rng = np.random.default_rng(1)
+    p, k = 15, 12
+    b_a, b_b = rng.normal(size=(40, 18)), rng.normal(size=(50, 18))
+    c_ab, c_ba = rng.normal(size=(p, k)), rng.normal(size=(p, k))
+    f_a, f_b = rng.normal(size=(40, 4)), rng.normal(size=(50, 4))
+    config = DenseConfig(bijectivity=0.5, orthogonality=2.0)
+    q, r = map_embeddings(b_a, b_b, c_ab, c_ba, config, f_a, f_b)
+
+    def term(x, y):
+        return ((x[:, None] - y[None]) ** 2).sum(-1)
+
+    want = (term(b_a[:, :p] @ c_ab, b_b[:, :k]) + 0.25 * term(b_a[:, :k], b_b[:, :p] @ c_ba)
+            + 4.0 * term(b_a[:, :k], b_b[:, :k] @ c_ab[:k].T) + config.landmark_weight**2 * term(f_a, f_b))
+    assert np.allclose(((q[:, None] - r[None]) ** 2).sum(-1), want, rtol=1e-10, atol=1e-9)
+
+
+@pytest.mark.slow
+def test_zoomout_with_a_margin_keeps_the_true_map_of_a_renumbered_copy(figure_poses):
+    # From the true correspondence of a renumbered copy, each step's rectangular fit is exact (the
+    # first k eigenfunctions of the copy lie in the span of the first k + margin of the shape), so
+    # ZoomOut and the final read-out return the truth at every vertex; a fit or a read-out that
+    # paired the wrong columns would not.
+    from darcyan.dense.maps import read_out_map, zoomout
+    from darcyan.geometry.shape import prepare_shape
+
+    mesh = figure_poses[0]
+    order = np.random.default_rng(7).permutation(mesh.n_vertices)
+    shape, copy = prepare_shape(mesh), prepare_shape(Mesh(mesh.vertices[order], np.argsort(order)[mesh.faces]))
+    config = DenseConfig(basis_start=10, basis_size=20, basis_step=5, basis_margin=6, margin_from=15,
+                         landmark_weight=0, signature_weight=0, signature_turns=0)
+    basis_1, basis_2 = shape.spectrum(26).vectors, copy.spectrum(26).vectors
+    truth_12, truth_21 = np.argsort(order), order
+    c_12, c_21 = zoomout(basis_1, basis_2, truth_12, truth_21, config)
+    assert c_12.shape == c_21.shape == (26, 20)
+    none = np.zeros((mesh.n_vertices, 0)), np.zeros((copy.n_vertices, 0))
+    assert (read_out_map(copy, basis_1, basis_2, c_12, c_21, config, *none, np.arange(copy.n_vertices))
+            == truth_12).all()
+
+
 def test_dense_config_rejects_bad_seed_settings():
     with pytest.raises(ConfigError, match="candidates"):
         DenseConfig(candidates=0)
@@ -443,6 +486,8 @@ def test_functional_map_fits_equal_least_squares_with_fewer_samples_than_columns
         basis, mapped = rng.normal(size=(samples, 10)), rng.normal(size=(samples, 7))
         expected = np.linalg.lstsq(basis[:, :7], mapped, rcond=None)[0]
         assert np.allclose(_Fitter(basis).fit(mapped), expected, atol=1e-10)
+        wider = np.linalg.lstsq(basis[:, :9], mapped, rcond=None)[0]  # a margin: (9, 7)
+        assert np.allclose(_Fitter(basis).fit(mapped, 9), wider, atol=1e-10)
 
 
 def test_landmark_coordinates_follow_the_vertices_of_a_moved_and_renumbered_copy(figure_poses):

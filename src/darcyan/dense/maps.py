@@ -70,7 +70,7 @@ class DenseConfig:
     Attributes:
         method: ``"zoomout"``: geodesic landmark coordinates, then the bijective ZoomOut below;
             ``"pyfm"``: pyFM's functional map with the landmarks as descriptors, then its ZoomOut
-            (``pip install 'darcyan[pyfm]'``; slower, the ``basis_*``, ``zoomout_samples``,
+            (``pip install 'darcyan[pyfm]'``; slower, the ``basis_*``, ``margin_from``, ``zoomout_samples``,
             ``bijectivity``, ``orthogonality``, ``signature_weight``, ``signature_until`` and
             ``ensemble`` fields do not apply).
         landmarks: ``"consistent"``: keep the largest set of matches whose pairwise geodesic
@@ -79,8 +79,18 @@ class DenseConfig:
             at most this fraction of the larger one (plus ``consistency_floor``).
         consistency_floor: absolute slack of that test, in sqrt(area) units.
         basis_start: size of the first functional map of ZoomOut.
-        basis_size: size of the last one (Laplace-Beltrami eigenfunctions computed per shape).
+        basis_size: size of the last one (Laplace-Beltrami eigenfunctions computed per shape:
+            this many plus ``basis_margin``).
         basis_step: growth of the basis per ZoomOut iteration.
+        basis_margin: from ZoomOut's size ``margin_from`` on, the step of size k fits each
+            functional map from k + ``basis_margin`` eigenfunctions of the shape it maps from to
+            the k first of the other (a rectangular map), in the steps and in the final map.
+            Between two bodies that are not isometric the eigenfunctions do not pair up index
+            by index: near the cut at k, one shape's k-th is a mix of the other's on either side
+            of it, which a square map must drop (``docs/parameters.md``). The short ZoomOuts that
+            score the seeds keep square maps.
+        margin_from: the smallest size of ZoomOut that gets the margin (from the first size on,
+            three FAUST maps of 40 lost 2-6 points).
         zoomout_samples: ZoomOut iterates on this many random surface samples of each shape
             (0 = on all vertices); the final map is always computed for every source vertex.
         ensemble: ZoomOut runs from this many independent draws of the samples (the first
@@ -145,6 +155,8 @@ class DenseConfig:
     basis_start: int = 10
     basis_size: int = 120
     basis_step: int = 4
+    basis_margin: int = 10
+    margin_from: int = 40
     zoomout_samples: int = 2000
     ensemble: int = 1
     bijectivity: float = 1.0
@@ -178,7 +190,8 @@ class DenseConfig:
                 raise ConfigError(f"dense: {name} must be a positive integer, got {value!r}")
         if self.basis_start > self.basis_size:
             raise ConfigError(f"dense: basis_start ({self.basis_start}) exceeds basis_size ({self.basis_size})")
-        for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "signature_until"):
+        for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "signature_until",
+                     "basis_margin", "margin_from"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 0:
                 raise ConfigError(f"dense: {name} must be a non-negative integer, got {value!r}")
@@ -295,9 +308,10 @@ def zoomout_samples(shape_1, shape_2, config: DenseConfig, member: int = 0) -> t
 
 
 def dense_basis(shape, config: DenseConfig) -> np.ndarray:
-    """``(n, basis_size)`` the shape's Laplace-Beltrami eigenvectors (built once per shape; on
-    the coarse proxy of a large mesh, see ``DenseConfig.basis_proxy_vertices``)."""
-    return shape.smooth_basis(min(config.basis_size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
+    """``(n, basis_size + basis_margin)`` the shape's Laplace-Beltrami eigenvectors (built once per
+    shape; on the coarse proxy of a large mesh, see ``DenseConfig.basis_proxy_vertices``)."""
+    size = config.basis_size + config.basis_margin
+    return shape.smooth_basis(min(size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
                               tol=config.basis_tolerance, shift=EIGSH_SHIFT)
 
 
@@ -378,12 +392,13 @@ class _Fitter:
             self.q, r = np.linalg.qr(basis)
             self.r_inverse = np.linalg.inv(r)
 
-    def fit(self, mapped: np.ndarray) -> np.ndarray:
-        """``(k, k)`` ``C`` with ``basis[:, :k] @ C ~ mapped`` (``mapped (s, k)``)."""
-        k = mapped.shape[1]
+    def fit(self, mapped: np.ndarray, p: int | None = None) -> np.ndarray:
+        """``(p, k)`` ``C`` with ``basis[:, :p] @ C ~ mapped`` (``mapped (s, k)``; ``p``, at most
+        the basis's columns, defaults to k)."""
+        p = mapped.shape[1] if p is None else p
         if self.q is None:
-            return np.linalg.lstsq(self.basis[:, :k], mapped, rcond=None)[0]
-        return self.r_inverse[:k, :k] @ (self.q[:, :k].T @ mapped)
+            return np.linalg.lstsq(self.basis[:, :p], mapped, rcond=None)[0]
+        return self.r_inverse[:p, :p] @ (self.q[:, :p].T @ mapped)
 
 
 def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.ndarray,
@@ -395,19 +410,22 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
     ``config.landmark_weight``; with ``g_a (s_a, d)``, ``g_b (s_b, d)``, those coordinates as they
     are): ``nearest_rows(references, queries)`` is the vertex map.
 
-    ``c_ab (k, k)`` pulls b's coefficients back to a (``b_a C_ab ~ b_b[map]``), ``c_ba`` the
-    reverse. Coupling: ``b_b[j] ~ b_a[i] C_ab``; bijectivity (``C_ab C_ba ~ I``):
-    ``b_b[j] C_ba ~ b_a[i]``; orthogonality (``C_ab C_ab^T ~ I``): ``b_b[j] C_ab^T ~ b_a[i]``.
+    ``c_ab (p, k)`` (p >= k: see ``DenseConfig.basis_margin``) pulls b's first k coefficients
+    back to a's first p (``b_a[:, :p] C_ab ~ b_b[map, :k]``), ``c_ba (p, k)`` the reverse; the
+    bases ``b_a``, ``b_b`` have at least p columns. Coupling: ``b_b[j, :k] ~ b_a[i, :p] C_ab``;
+    bijectivity (``C_ab C_ba ~ I``): ``b_b[j, :p] C_ba ~ b_a[i, :k]``; orthogonality
+    (``C_ab C_ab^T ~ I``, on the first k rows): ``b_b[j, :k] C_ab[:k]^T ~ b_a[i, :k]``.
     """
-    queries, references = [b_a @ c_ab], [b_b]
+    p, k = c_ab.shape
+    queries, references = [b_a[:, :p] @ c_ab], [b_b[:, :k]]
     w1, w2 = config.bijectivity ** 2, config.orthogonality ** 2
     if w1 + w2 > 0:
         # Both terms compare b_a[i] with a row of b: w1 |a - x_j|^2 + w2 |a - y_j|^2 equals
         # (w1 + w2) |a - m_j|^2 + w1 w2 / (w1 + w2) |x_j - y_j|^2 with m_j their weighted mean:
         # one block of k columns and one column carrying the j-only part, not two blocks.
-        x, y = b_b @ c_ba, b_b @ c_ab.T
+        x, y = b_b[:, :p] @ c_ba, b_b[:, :k] @ c_ab[:k].T
         total = w1 + w2
-        queries += [np.sqrt(total) * b_a, np.zeros((len(b_a), 1))]
+        queries += [np.sqrt(total) * b_a[:, :k], np.zeros((len(b_a), 1))]
         references += [(w1 * x + w2 * y) / np.sqrt(total),
                        np.sqrt(w1 * w2 / total) * np.linalg.norm(x - y, axis=1)[:, None]]
     if config.landmark_weight > 0 and f_a is not None:
@@ -426,7 +444,8 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
             steady_2: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Bijective ZoomOut on (sampled) vertices.
 
-    ``basis_i (s_i, K)``: Laplace-Beltrami eigenfunctions at the vertices taking part;
+    ``basis_i (s_i, K)``: Laplace-Beltrami eigenfunctions at the vertices taking part (K up to
+    ``config.basis_size + config.basis_margin``);
     ``map_12 (s_1,)`` indices of rows of ``basis_2`` (the current map 1 -> 2) and ``map_21
     (s_2,)`` the reverse. For k from ``config.basis_start`` to ``config.basis_size`` by
     ``config.basis_step``: fit the k x k functional maps of both directions to the current
@@ -437,16 +456,19 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     size at most ``config.signature_until`` only (the weighted point signatures); ``steady_i (s_i,
     t)``: coordinates that join them in every step (the weighted signature turns).
 
-    Returns ``c_12, c_21`` (``(k, k)``, the last size): ``basis_1 @ c_12 ~ basis_2[map_12]``.
+    Returns ``c_12, c_21`` (``(p, k)``, the last size k and its p = k + margin columns, see
+    :func:`map_embeddings`): ``basis_1[:, :p] @ c_12 ~ basis_2[map_12, :k]``.
     """
     largest = min(config.basis_size, basis_1.shape[1], basis_2.shape[1])
     sizes = list(range(min(config.basis_start, largest), largest + 1, config.basis_step))
     if sizes[-1] != largest:
         sizes.append(largest)
-    fit_1, fit_2 = _Fitter(basis_1[:, :largest]), _Fitter(basis_2[:, :largest])
+    widest = min(largest + config.basis_margin, basis_1.shape[1], basis_2.shape[1])
+    fit_1, fit_2 = _Fitter(basis_1[:, :widest]), _Fitter(basis_2[:, :widest])
     for i, k in enumerate(sizes):
-        b1, b2 = basis_1[:, :k], basis_2[:, :k]
-        c_12, c_21 = fit_1.fit(b2[map_12]), fit_2.fit(b1[map_21])
+        p = min(k + config.basis_margin, widest) if k >= config.margin_from else k
+        b1, b2 = basis_1[:, :p], basis_2[:, :p]
+        c_12, c_21 = fit_1.fit(b2[map_12, :k], p), fit_2.fit(b1[map_21, :k], p)
         if i < len(sizes) - 1:
             g_1, g_2 = (coarse_1, coarse_2) if k <= config.signature_until else (None, None)
             g_1, g_2 = _joined(g_1, steady_1), _joined(g_2, steady_2)
@@ -564,13 +586,12 @@ def read_out_map(shape_2, basis_1: np.ndarray, basis_2: np.ndarray, c_12: np.nda
                  sample_2: np.ndarray, steady_1: np.ndarray | None = None,
                  steady_2: np.ndarray | None = None) -> np.ndarray:
     """``(n1,)`` for every source vertex a target vertex (prepared numbering): the nearest rows of
-    the :func:`map_embeddings` of functional maps ``c_12, c_21 (k, k)`` on the bases ``(n_i,
-    >= k)``, the landmark coordinates ``(n_i, c)`` and, as they are, ``steady_i (n_i, t)`` (the
+    the :func:`map_embeddings` of functional maps ``c_12, c_21 (p, k)`` on the bases ``(n_i,
+    >= p)``, the landmark coordinates ``(n_i, c)`` and, as they are, ``steady_i (n_i, t)`` (the
     weighted signature turns, when given); a target mesh of more than
     ``config.local_search_above`` vertices is searched near each image's nearest ZoomOut sample
     (``sample_2``, see :func:`darcyan.geometry.knn.nearest_rows_near`)."""
-    k = len(c_12)
-    q, r = map_embeddings(basis_1[:, :k], basis_2[:, :k], c_12, c_21, config, coords_1, coords_2, steady_1, steady_2)
+    q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, steady_1, steady_2)
     mesh_2 = shape_2.mesh
     if mesh_2.n_vertices > config.local_search_above and len(sample_2) < mesh_2.n_vertices:
         return nearest_rows_near(r, q, mesh_2.vertices, sample_2, config.local_search_reach)
@@ -746,7 +767,8 @@ class _SeedScoring:
 
     def __init__(self, shape_1, shape_2, config: DenseConfig, samples: tuple, bases: tuple):
         size = min(config.seed_basis, config.basis_size)
-        self.config = dataclasses.replace(config, basis_size=size, basis_start=min(config.basis_start, size))
+        self.config = dataclasses.replace(config, basis_size=size, basis_start=min(config.basis_start, size),
+                                          basis_margin=0)
         self.points = []
         for sample in samples:
             count = min(config.seed_samples, len(sample))
@@ -759,8 +781,7 @@ class _SeedScoring:
         (p_1, p_2), (b_1, b_2) = self.points, self.bases
         f_1, f_2 = coords_1[p_1], coords_2[p_2]
         c_12, c_21 = zoomout(b_1, b_2, nearest_rows(f_2, f_1), nearest_rows(f_1, f_2), self.config, f_1, f_2)
-        k = len(c_12)
-        q, r = map_embeddings(b_1[:, :k], b_2[:, :k], c_12, c_21, self.config, f_1, f_2)
+        q, r = map_embeddings(b_1, b_2, c_12, c_21, self.config, f_1, f_2)
         return float(np.abs(self.signatures[0] - self.signatures[1][nearest_rows(r, q)]).mean())
 
 
