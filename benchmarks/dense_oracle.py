@@ -11,8 +11,9 @@ For each of N pairs drawn (seed 0) from PAIRS (``source<TAB>target[<TAB>group]``
 * ``last steps from truth``: only ZoomOut's last iterations (sizes ``basis_size - 10`` to
   ``basis_size``, one by one), started from the true correspondence: what the iterations at
   the final size do to a right map;
-* ``best at k``: no iteration at all: the functional maps of size k fitted by least squares to
-  the true correspondence of every listed vertex, read out by the dense map's own final step
+* ``best at k``: no iteration at all: the functional maps of size k (from k + ``basis_margin``
+  eigenfunctions of the other shape, like the dense map's own) fitted by least squares to the
+  true correspondence of every listed vertex, read out by the dense map's own final step
   (:func:`darcyan.dense.maps.read_out_map`). No map read out of k eigenfunctions does much
   better: it bounds what ZoomOut could reach with this basis (and the ground truth's own
   rounding to vertices sets a floor under all).
@@ -116,8 +117,10 @@ def score_pair(task: tuple) -> dict:
         sized = dataclasses.replace(config, basis_size=size)
         b_1, b_2 = dense_basis(shape_1, sized), dense_basis(shape_2, sized)
         k = min(size, b_1.shape[1], b_2.shape[1])
-        c_12 = np.linalg.lstsq(b_1[source, :k], b_2[target, :k], rcond=None)[0]
-        c_21 = np.linalg.lstsq(b_2[target, :k], b_1[source, :k], rcond=None)[0]
+        # as wide as dense_map's own maps of that size (DenseConfig.basis_margin)
+        p = min(k + config.basis_margin, b_1.shape[1], b_2.shape[1]) if k >= config.margin_from else k
+        c_12 = np.linalg.lstsq(b_1[source, :p], b_2[target, :k], rcond=None)[0]
+        c_21 = np.linalg.lstsq(b_2[target, :p], b_1[source, :k], rcond=None)[0]
         maps[f"best at {size}"] = read_out(c_12, c_21, b_1, b_2)
     scores = evaluate_dense_maps(shape_1.mesh, shape_2.mesh, maps, truth, target_solver=shape_2.solver)
     return {"pair": f"{source_name}->{target_name}", "group": group,

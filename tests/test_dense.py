@@ -445,8 +445,8 @@ def test_rectangular_zoomout_terms_measure_the_same_distances():
 def test_zoomout_with_a_margin_keeps_the_true_map_of_a_renumbered_copy(figure_poses):
     # From the true correspondence of a renumbered copy, each step's rectangular fit is exact (the
     # first k eigenfunctions of the copy lie in the span of the first k + margin of the shape), so
-    # ZoomOut and the final read-out return the truth at every vertex; a fit or a read-out that
-    # paired the wrong columns would not.
+    # ZoomOut and the final read-out return the truth at every vertex; a fit or coupling term on
+    # mismatched columns would not (the columns of the other terms: the test above).
     from darcyan.dense.maps import read_out_map, zoomout
     from darcyan.geometry.shape import prepare_shape
 

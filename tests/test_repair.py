@@ -139,6 +139,8 @@ def test_weld_tolerance_zero_never_welds():
     with pytest.warns(MeshWarning, match="component"):  # the halves stay apart: one is kept
         kept, changes = prepare_mesh(cut, repair=True, settings=Repairing(weld_tolerance=0.0))
     assert kept.n_vertices == 6 and not any("welded" in c for c in changes)
+    with pytest.raises(MeshError, match="a triangle soup\\? \\(welding is off: weld_tolerance 0\\)"):
+        prepare_mesh(soup(cut), repair=True, settings=Repairing(weld_tolerance=0.0))
 
 
 def test_soup_is_one_error_line_on_the_command_line(capsys, tmp_path):

@@ -25,7 +25,7 @@ turns from the landmark directions to the signature's (:func:`signature_turn_coo
 Large meshes: the basis is computed on a decimated proxy and interpolated, and the final map
 searches each image near its nearest ZoomOut sample (:func:`darcyan.geometry.knn.nearest_rows_near`).
 
-Memory stays O(V): the functional maps are k x k, nearest neighbours are searched with a k-d
+Memory stays O(V): the functional maps are (k + margin) x k, nearest neighbours are searched with a k-d
 tree (few dimensions) or by blocks of source rows (spectral dimensions).
 
 :func:`evaluate_dense` scores a dense map against ground truth on a fixed random sample of
@@ -308,9 +308,9 @@ def zoomout_samples(shape_1, shape_2, config: DenseConfig, member: int = 0) -> t
 
 
 def dense_basis(shape, config: DenseConfig) -> np.ndarray:
-    """``(n, basis_size + basis_margin)`` the shape's Laplace-Beltrami eigenvectors (built once per
+    """``(n, basis_size [+ basis_margin when ZoomOut reaches margin_from])`` the shape's Laplace-Beltrami eigenvectors (built once per
     shape; on the coarse proxy of a large mesh, see ``DenseConfig.basis_proxy_vertices``)."""
-    size = config.basis_size + config.basis_margin
+    size = config.basis_size + (config.basis_margin if config.basis_size >= config.margin_from else 0)
     return shape.smooth_basis(min(size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
                               tol=config.basis_tolerance, shift=EIGSH_SHIFT)
 
@@ -413,8 +413,10 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
     ``c_ab (p, k)`` (p >= k: see ``DenseConfig.basis_margin``) pulls b's first k coefficients
     back to a's first p (``b_a[:, :p] C_ab ~ b_b[map, :k]``), ``c_ba (p, k)`` the reverse; the
     bases ``b_a``, ``b_b`` have at least p columns. Coupling: ``b_b[j, :k] ~ b_a[i, :p] C_ab``;
-    bijectivity (``C_ab C_ba ~ I``): ``b_b[j, :p] C_ba ~ b_a[i, :k]``; orthogonality
-    (``C_ab C_ab^T ~ I``, on the first k rows): ``b_b[j, :k] C_ab[:k]^T ~ b_a[i, :k]``.
+    bijectivity (the map b -> a undoes a -> b): ``b_b[j, :p] C_ba ~ b_a[i, :k]``; orthogonality
+    (area preservation, ``C C^T ~ I`` for a square map): ``b_b[j, :k] C_ab[:k]^T ~ b_a[i, :k]``,
+    on the square k x k block alone, leaving a's columns beyond k out of this term (a choice that
+    holds near isometry, where that block carries the map, not an exact condition).
     """
     p, k = c_ab.shape
     queries, references = [b_a[:, :p] @ c_ab], [b_b[:, :k]]
@@ -448,15 +450,16 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     ``config.basis_size + config.basis_margin``);
     ``map_12 (s_1,)`` indices of rows of ``basis_2`` (the current map 1 -> 2) and ``map_21
     (s_2,)`` the reverse. For k from ``config.basis_start`` to ``config.basis_size`` by
-    ``config.basis_step``: fit the k x k functional maps of both directions to the current
+    ``config.basis_step``: fit the functional maps of both directions to the current
     vertex maps (least squares), then update both vertex maps by nearest neighbours of the
     embeddings of :func:`map_embeddings` (ZoomOut, Melzi et al. 2019, with the bijectivity and
-    orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*, 2021).
-    ``coarse_i (s_i, c)``: coordinates that join the embeddings, as they are, in the steps of
+    orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*, 2021); from
+    size ``config.margin_from`` on each map is rectangular, (k + ``config.basis_margin``) x k
+    (capped by the bases' columns), below it k x k. ``coarse_i (s_i, c)``: coordinates that join the embeddings, as they are, in the steps of
     size at most ``config.signature_until`` only (the weighted point signatures); ``steady_i (s_i,
     t)``: coordinates that join them in every step (the weighted signature turns).
 
-    Returns ``c_12, c_21`` (``(p, k)``, the last size k and its p = k + margin columns, see
+    Returns ``c_12, c_21`` (``(p, k)``: the last size k and its p columns, as above; see
     :func:`map_embeddings`): ``basis_1[:, :p] @ c_12 ~ basis_2[map_12, :k]``.
     """
     largest = min(config.basis_size, basis_1.shape[1], basis_2.shape[1])

@@ -204,10 +204,13 @@ def _refuse_soup(mesh: Mesh, repair: bool, tolerance: float) -> None:
     uses = np.bincount(mesh.faces.ravel(), minlength=mesh.n_vertices)
     single = int((uses[mesh.faces] == 1).all(axis=1).sum())
     if single > SOUP_FRACTION * mesh.n_faces:
-        if repair:  # welded already: the copies of a vertex are not where the others are
+        if repair and tolerance > 0:  # welded already: the copies of a vertex are not where the others are
             raise MeshError(mesh.name, f"{single} components of 1 face each even after welding "
                                        f"coincident vertices: a triangle soup whose copies of a vertex "
                                        f"differ by more than {tolerance:g} of the mean edge?")
+        if repair:
+            raise MeshError(mesh.name, f"{single} components of 1 face each: a triangle soup? "
+                                       f"(welding is off: weld_tolerance 0)")
         raise MeshError(mesh.name, f"{single} components of 1 face each: a triangle soup? "
                                    f"--repair welds coincident vertices")
 
