@@ -42,6 +42,7 @@ from darcyan.dense.maps import (
     DenseConfig,
     dense_basis,
     dense_map,
+    fit_width,
     input_map,
     landmark_coordinates,
     read_out_map,
@@ -117,8 +118,7 @@ def score_pair(task: tuple) -> dict:
         sized = dataclasses.replace(config, basis_size=size)
         b_1, b_2 = dense_basis(shape_1, sized), dense_basis(shape_2, sized)
         k = min(size, b_1.shape[1], b_2.shape[1])
-        # as wide as dense_map's own maps of that size (DenseConfig.basis_margin)
-        p = min(k + config.basis_margin, b_1.shape[1], b_2.shape[1]) if k >= config.margin_from else k
+        p = fit_width(k, config, min(b_1.shape[1], b_2.shape[1]))  # as wide as dense_map's own maps
         c_12 = np.linalg.lstsq(b_1[source, :p], b_2[target, :k], rcond=None)[0]
         c_21 = np.linalg.lstsq(b_2[target, :p], b_1[source, :k], rcond=None)[0]
         maps[f"best at {size}"] = read_out(c_12, c_21, b_1, b_2)

@@ -25,8 +25,8 @@ turns from the landmark directions to the signature's (:func:`signature_turn_coo
 Large meshes: the basis is computed on a decimated proxy and interpolated, and the final map
 searches each image near its nearest ZoomOut sample (:func:`darcyan.geometry.knn.nearest_rows_near`).
 
-Memory stays O(V): the functional maps are (k + margin) x k, nearest neighbours are searched with a k-d
-tree (few dimensions) or by blocks of source rows (spectral dimensions).
+Memory stays O(V): the functional maps are (k + margin) x k, nearest neighbours are searched
+with a k-d tree (few dimensions) or by blocks of source rows (spectral dimensions).
 
 :func:`evaluate_dense` scores a dense map against ground truth on a fixed random sample of
 source vertices with the standard geodesic error (see :mod:`darcyan.eval.metrics`);
@@ -307,10 +307,18 @@ def zoomout_samples(shape_1, shape_2, config: DenseConfig, member: int = 0) -> t
     return np.arange(shape_1.mesh.n_vertices), np.arange(shape_2.mesh.n_vertices)
 
 
+def fit_width(k: int, config: DenseConfig, columns: int | None = None) -> int:
+    """How many eigenfunctions of the shape a functional map of size k maps from: k +
+    ``config.basis_margin`` from the size ``config.margin_from`` on, else k (at most ``columns``,
+    the bases' columns, when given)."""
+    p = k + config.basis_margin if k >= config.margin_from else k
+    return p if columns is None else min(p, columns)
+
+
 def dense_basis(shape, config: DenseConfig) -> np.ndarray:
-    """``(n, basis_size [+ basis_margin when ZoomOut reaches margin_from])`` the shape's Laplace-Beltrami eigenvectors (built once per
+    """``(n, fit_width(basis_size))`` the shape's Laplace-Beltrami eigenvectors (built once per
     shape; on the coarse proxy of a large mesh, see ``DenseConfig.basis_proxy_vertices``)."""
-    size = config.basis_size + (config.basis_margin if config.basis_size >= config.margin_from else 0)
+    size = fit_width(config.basis_size, config)
     return shape.smooth_basis(min(size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
                               tol=config.basis_tolerance, shift=EIGSH_SHIFT)
 
@@ -453,11 +461,11 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     ``config.basis_step``: fit the functional maps of both directions to the current
     vertex maps (least squares), then update both vertex maps by nearest neighbours of the
     embeddings of :func:`map_embeddings` (ZoomOut, Melzi et al. 2019, with the bijectivity and
-    orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*, 2021); from
-    size ``config.margin_from`` on each map is rectangular, (k + ``config.basis_margin``) x k
-    (capped by the bases' columns), below it k x k. ``coarse_i (s_i, c)``: coordinates that join the embeddings, as they are, in the steps of
-    size at most ``config.signature_until`` only (the weighted point signatures); ``steady_i (s_i,
-    t)``: coordinates that join them in every step (the weighted signature turns).
+    orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*, 2021); each
+    map is :func:`fit_width` x k (rectangular from ``config.margin_from`` on). ``coarse_i (s_i,
+    c)``: coordinates that join the embeddings, as they are, in the steps of size at most
+    ``config.signature_until`` only (the weighted point signatures); ``steady_i (s_i, t)``:
+    coordinates that join them in every step (the weighted signature turns).
 
     Returns ``c_12, c_21`` (``(p, k)``: the last size k and its p columns, as above; see
     :func:`map_embeddings`): ``basis_1[:, :p] @ c_12 ~ basis_2[map_12, :k]``.
@@ -466,10 +474,11 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     sizes = list(range(min(config.basis_start, largest), largest + 1, config.basis_step))
     if sizes[-1] != largest:
         sizes.append(largest)
-    widest = min(largest + config.basis_margin, basis_1.shape[1], basis_2.shape[1])
+    columns = min(basis_1.shape[1], basis_2.shape[1])
+    widest = fit_width(largest, config, columns)
     fit_1, fit_2 = _Fitter(basis_1[:, :widest]), _Fitter(basis_2[:, :widest])
     for i, k in enumerate(sizes):
-        p = min(k + config.basis_margin, widest) if k >= config.margin_from else k
+        p = fit_width(k, config, columns)
         b1, b2 = basis_1[:, :p], basis_2[:, :p]
         c_12, c_21 = fit_1.fit(b2[map_12, :k], p), fit_2.fit(b1[map_21, :k], p)
         if i < len(sizes) - 1:
