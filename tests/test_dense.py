@@ -464,6 +464,12 @@ def test_zoomout_with_a_margin_keeps_the_true_map_of_a_renumbered_copy(figure_po
             == truth_12).all()
 
 
+def test_dense_config_rejects_a_bad_margin():
+    for bad in (dict(basis_margin=-1), dict(margin_from=2.5), dict(basis_margin="10")):
+        with pytest.raises(ConfigError, match=f"dense: {next(iter(bad))} must be a non-negative integer"):
+            DenseConfig(**bad)
+
+
 def test_dense_config_rejects_bad_seed_settings():
     with pytest.raises(ConfigError, match="candidates"):
         DenseConfig(candidates=0)
