@@ -41,6 +41,7 @@ from darcyan.dense.maps import (
     DENSE_FAILURES,
     DenseConfig,
     dense_basis,
+    dense_eigenvalues,
     dense_map,
     fit_width,
     input_map,
@@ -103,6 +104,7 @@ def score_pair(task: tuple) -> dict:
     k_landmarks = len(made.landmarks)  # coords: the distances to the landmarks first, then their turns
     steady = signature_turn_coordinates(shape_1, shape_2, config, coords_1[:, :k_landmarks], coords_2[:, :k_landmarks])
     extra = [None if c is None else c[s] for pair in (coarse, steady) for c, s in zip(pair, samples)]
+    values = dense_eigenvalues(shape_1, config), dense_eigenvalues(shape_2, config)  # the commutativity term's
 
     def read_out(c_12, c_21, b_1, b_2):  # the dense map's own final step, in input numbering
         local = read_out_map(shape_2, b_1, b_2, c_12, c_21, config, coords_1, coords_2, s_2, *steady)
@@ -111,7 +113,7 @@ def score_pair(task: tuple) -> dict:
     last_steps = dataclasses.replace(config, basis_start=max(config.basis_size - LAST_STEPS, 1), basis_step=1)
     for name, schedule in (("zoomout from truth", config), ("last steps from truth", last_steps)):
         c_12, c_21 = zoomout(basis_1[s_1], basis_2[s_2], first_12, first_21, schedule, coords_1[s_1], coords_2[s_2],
-                             *extra)
+                             *extra, *values)
         maps[name] = read_out(c_12, c_21, basis_1, basis_2)
 
     for size in sizes:

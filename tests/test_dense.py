@@ -442,11 +442,14 @@ def test_rectangular_zoomout_terms_measure_the_same_distances():
 
 
 @pytest.mark.slow
-def test_zoomout_with_a_margin_keeps_the_true_map_of_a_renumbered_copy(figure_poses):
+@pytest.mark.parametrize("commutativity", [0.0, 3.0])
+def test_zoomout_with_a_margin_keeps_the_true_map_of_a_renumbered_copy(figure_poses, commutativity):
     # From the true correspondence of a renumbered copy, each step's rectangular fit is exact (the
     # first k eigenfunctions of the copy lie in the span of the first k + margin of the shape), so
     # ZoomOut and the final read-out return the truth at every vertex; a fit or coupling term on
-    # mismatched columns would not (the columns of the other terms: the test above).
+    # mismatched columns would not (the columns of the other terms: the test above). The
+    # commutativity term costs nothing there (the copy's eigenvalues are the shape's, and the true
+    # map pairs each eigenfunction with its own), so it must not move the map either.
     from darcyan.dense.maps import read_out_map, zoomout
     from darcyan.geometry.shape import prepare_shape
 
@@ -454,14 +457,55 @@ def test_zoomout_with_a_margin_keeps_the_true_map_of_a_renumbered_copy(figure_po
     order = np.random.default_rng(7).permutation(mesh.n_vertices)
     shape, copy = prepare_shape(mesh), prepare_shape(Mesh(mesh.vertices[order], np.argsort(order)[mesh.faces]))
     config = DenseConfig(basis_start=10, basis_size=20, basis_step=5, basis_margin=6, margin_from=15,
-                         landmark_weight=0, signature_weight=0, signature_turns=0)
-    basis_1, basis_2 = shape.spectrum(26).vectors, copy.spectrum(26).vectors
+                         landmark_weight=0, signature_weight=0, signature_turns=0, commutativity=commutativity)
+    spectrum_1, spectrum_2 = shape.spectrum(26), copy.spectrum(26)
+    basis_1, basis_2 = spectrum_1.vectors, spectrum_2.vectors
     truth_12, truth_21 = np.argsort(order), order
-    c_12, c_21 = zoomout(basis_1, basis_2, truth_12, truth_21, config)
+    c_12, c_21 = zoomout(basis_1, basis_2, truth_12, truth_21, config,
+                         values_1=spectrum_1.values, values_2=spectrum_2.values)
     assert c_12.shape == c_21.shape == (26, 20)
     none = np.zeros((mesh.n_vertices, 0)), np.zeros((copy.n_vertices, 0))
     assert (read_out_map(copy, basis_1, basis_2, c_12, c_21, config, *none, np.arange(copy.n_vertices))
             == truth_12).all()
+
+
+def test_commutativity_shrinks_by_the_squared_relative_gap_of_the_eigenvalues():
+    from darcyan.dense.maps import commutativity_shrinkage
+
+    a, b = np.array([0.0, 1.0, 2.0, 5.0]), np.array([0.0, 1.0, 4.0])
+    factor = commutativity_shrinkage(a, b, 4, 3, 2.0)
+    assert factor.shape == (4, 3)
+    assert factor[0, 0] == 1.0 and factor[1, 1] == 1.0  # equal frequencies (the constants too): kept
+    assert np.isclose(factor[2, 2], 1 / (1 + 2.0 * (2 / 6) ** 2)) and np.isclose(factor[3, 1], 1 / (1 + 2.0 * (4 / 6) ** 2))
+    assert np.isclose(factor[0, 2], 1 / 3)  # the constant against any other: the full weight
+    # A shape scaled by s has its eigenvalues divided by s^2: the term does not see a scale.
+    assert np.allclose(commutativity_shrinkage(7.0 * a, 7.0 * b, 4, 3, 2.0), factor)
+    assert commutativity_shrinkage(a, b, 2, 3, 2.0).shape == (2, 3)
+    assert (commutativity_shrinkage(a, b, 4, 3, 0.0) == 1.0).all()
+
+
+def test_a_shrunk_fit_minimizes_the_commutativity_term_on_an_orthonormal_sample_basis():
+    # The documented claim: with B^T B = s I, the shrunk least-squares map is the exact minimizer
+    # of |B C - Y|^2 + s w sum(r_ij^2 C_ij^2), here solved column by column as stacked least squares.
+    from darcyan.dense.maps import _Fitter, commutativity_shrinkage
+
+    rng = np.random.default_rng(3)
+    s = 50
+    basis = np.sqrt(s) * np.linalg.qr(rng.normal(size=(s, 12)))[0]  # B^T B = s I
+    mapped = rng.normal(size=(s, 8))
+    values_a, values_b = np.sort(rng.uniform(0, 40, 12)), np.sort(rng.uniform(0, 40, 8))
+    c = _Fitter(basis).fit(mapped, 10) * commutativity_shrinkage(values_a, values_b, 10, 8, 3.0)
+    ratio = 1 / commutativity_shrinkage(values_a, values_b, 10, 8, 3.0) - 1  # w r_ij^2
+    for j in range(8):
+        stacked = np.vstack([basis[:, :10], np.diag(np.sqrt(s * ratio[:, j]))])
+        want = np.linalg.lstsq(stacked, np.r_[mapped[:, j], np.zeros(10)], rcond=None)[0]
+        assert np.allclose(c[:, j], want, atol=1e-10)
+
+
+def test_dense_config_rejects_a_bad_commutativity():
+    for bad in (-1.0, float("nan"), True, "3"):
+        with pytest.raises(ConfigError, match="dense: commutativity must be non-negative"):
+            DenseConfig(commutativity=bad)
 
 
 def test_dense_config_rejects_a_bad_margin():

@@ -145,6 +145,14 @@ class DenseConfig:
             O(V^2) work.
         local_search_reach: the coarse-to-fine search looks at the cells of this many samples
             around the nearest one.
+        commutativity: weight of a Laplacian commutativity term in the functional maps of the
+            chosen seed's ZoomOut (its steps and final map): each entry ``C[i, j]`` of a
+            least-squares fit is shrunk by ``1 / (1 + commutativity ((l_i - l_j) / (l_i +
+            l_j))^2)`` (``l`` the eigenvalues; :func:`commutativity_shrinkage`), so a map mixes
+            eigenfunctions of unlike frequencies only where the point map insists. Between two
+            bodies a point map's noise spreads over all the entries, and a plain fit carries it
+            into the next step. 0: plain ZoomOut fits. The short ZoomOuts that score the seeds
+            fit without it (``docs/parameters.md``).
         seed: seed of the surface samples.
     """
 
@@ -176,6 +184,7 @@ class DenseConfig:
     trust_orientation: float = 0.3
     local_search_above: int = 20000
     local_search_reach: int = 16
+    commutativity: float = 3.0
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -205,9 +214,11 @@ class DenseConfig:
         if not (isinstance(self.trust_orientation, (int, float)) and -1 <= self.trust_orientation <= 1):
             raise ConfigError(f"dense: trust_orientation must be in [-1, 1], got {self.trust_orientation!r}")
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
-                     "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns"):
+                     "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns",
+                     "commutativity"):
             value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and value >= 0):
+            if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0
+                    and np.isfinite(value)):
                 raise ConfigError(f"dense: {name} must be non-negative, got {value!r}")
 
 
@@ -321,6 +332,30 @@ def dense_basis(shape, config: DenseConfig) -> np.ndarray:
     size = fit_width(config.basis_size, config)
     return shape.smooth_basis(min(size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
                               tol=config.basis_tolerance, shift=EIGSH_SHIFT)
+
+
+def dense_eigenvalues(shape, config: DenseConfig) -> np.ndarray:
+    """``(fit_width(basis_size),)`` the eigenvalues of :func:`dense_basis`'s eigenfunctions
+    (ascending; of the coarse proxy where the basis comes from it)."""
+    size = fit_width(config.basis_size, config)
+    return shape.smooth_spectrum(min(size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
+                                 tol=config.basis_tolerance, shift=EIGSH_SHIFT).values
+
+
+def commutativity_shrinkage(values_a: np.ndarray, values_b: np.ndarray, p: int, k: int, weight: float) -> np.ndarray:
+    """``(p, k)`` the factor ``1 / (1 + weight r_ij^2)``, ``r_ij = (l_i - l_j) / (l_i + l_j)``
+    (0 where both are 0), by which ZoomOut shrinks each entry ``C[i, j]`` of its least-squares
+    functional map from b's first k eigenfunctions (eigenvalues ``l_j`` of ``values_b``) to
+    a's first p (``l_i``). On samples of an orthonormal basis (``B^T B = s I``, which samples
+    drawn by area approach) this is the exact minimizer of the fit's squared residual plus the
+    Laplacian commutativity term ``s * weight * sum(r_ij^2 C_ij^2)``, at no cost beyond the
+    fit. The relative gap, not the absolute one: between two bodies of unlike proportions the
+    eigenvalues differ by a share, and an absolute penalty would leave the low frequencies free
+    and pin the high ones."""
+    a, b = np.abs(values_a[:p, None]), np.abs(values_b[None, :k])
+    total = a + b
+    relative = np.divide(a - b, total, out=np.zeros_like(total), where=total > 0)
+    return 1.0 / (1.0 + weight * relative**2)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -451,7 +486,8 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
             config: "DenseConfig", fields_1: np.ndarray | None = None,
             fields_2: np.ndarray | None = None, coarse_1: np.ndarray | None = None,
             coarse_2: np.ndarray | None = None, steady_1: np.ndarray | None = None,
-            steady_2: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+            steady_2: np.ndarray | None = None, values_1: np.ndarray | None = None,
+            values_2: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Bijective ZoomOut on (sampled) vertices.
 
     ``basis_i (s_i, K)``: Laplace-Beltrami eigenfunctions at the vertices taking part (K up to
@@ -465,7 +501,9 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     map is :func:`fit_width` x k (rectangular from ``config.margin_from`` on). ``coarse_i (s_i,
     c)``: coordinates that join the embeddings, as they are, in the steps of size at most
     ``config.signature_until`` only (the weighted point signatures); ``steady_i (s_i, t)``:
-    coordinates that join them in every step (the weighted signature turns).
+    coordinates that join them in every step (the weighted signature turns); ``values_i (K,)``:
+    the bases' eigenvalues, for the commutativity term of the fits (``config.commutativity``;
+    without them, plain least-squares fits).
 
     Returns ``c_12, c_21`` (``(p, k)``: the last size k and its p columns, as above; see
     :func:`map_embeddings`): ``basis_1[:, :p] @ c_12 ~ basis_2[map_12, :k]``.
@@ -481,6 +519,9 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
         p = fit_width(k, config, columns)
         b1, b2 = basis_1[:, :p], basis_2[:, :p]
         c_12, c_21 = fit_1.fit(b2[map_12, :k], p), fit_2.fit(b1[map_21, :k], p)
+        if config.commutativity > 0 and values_1 is not None:
+            c_12 = c_12 * commutativity_shrinkage(values_1, values_2, p, k, config.commutativity)
+            c_21 = c_21 * commutativity_shrinkage(values_2, values_1, p, k, config.commutativity)
         if i < len(sizes) - 1:
             g_1, g_2 = (coarse_1, coarse_2) if k <= config.signature_until else (None, None)
             g_1, g_2 = _joined(g_1, steady_1), _joined(g_2, steady_2)
@@ -562,8 +603,11 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             first_21 = nearest_rows(coords_1[sample_1], coords_2[sample_2])
             coarse_1, coarse_2 = (None, None) if signature_1 is None else (signature_1[sample_1], signature_2[sample_2])
             turns = (None, None) if steady_1 is None else (steady_1[sample_1], steady_2[sample_2])
+            values = (None, None)
+            if config.commutativity > 0:
+                values = dense_eigenvalues(shape_1, config), dense_eigenvalues(shape_2, config)
             c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
-                                 coords_1[sample_1], coords_2[sample_2], coarse_1, coarse_2, *turns)
+                                 coords_1[sample_1], coords_2[sample_2], coarse_1, coarse_2, *turns, *values)
             maps.append(read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2,
                                      steady_1, steady_2))
         local = consensus_map(mesh_2.vertices, maps)

@@ -105,11 +105,21 @@ class Shape:
         :meth:`proxy` and interpolated (smooth functions lose nothing there; the eigensolver on
         50k vertices takes tens of seconds), and are then not mass-orthonormal. ``tol``: the
         eigensolver's relative accuracy (0: machine precision)."""
+        return self.smooth_spectrum(k, proxy_vertices, tol, shift).vectors
+
+    def smooth_spectrum(self, k: int, proxy_vertices: int = 0, tol: float = 0.0, shift: float = SHIFT) -> Spectrum:
+        """The eigenpairs behind :meth:`smooth_basis`: on a large mesh the coarse proxy's
+        eigenvalues and its eigenvectors interpolated to the vertices (``mass``: the mesh's
+        vertex areas)."""
         proxy = self.proxy(proxy_vertices) if proxy_vertices > 0 else None
         if proxy is None:
-            return self.spectrum(k, tol, shift).vectors
-        return self._once(("proxy basis", k, proxy_vertices, tol, shift), lambda: proxy.to_full(
-            laplace_beltrami_spectrum(proxy.mesh, min(k, proxy.mesh.n_vertices - 1), tol=tol, shift=shift).vectors))
+            return self.spectrum(k, tol, shift)
+
+        def interpolated():
+            coarse = laplace_beltrami_spectrum(proxy.mesh, min(k, proxy.mesh.n_vertices - 1), tol=tol, shift=shift)
+            return Spectrum(coarse.values, proxy.to_full(coarse.vectors), self.vertex_areas)
+
+        return self._once(("proxy basis", k, proxy_vertices, tol, shift), interpolated)
 
     def proxy(self, vertices: int):
         """A :class:`~darcyan.geometry.proxy.CoarseProxy` of about ``vertices`` vertices, or
