@@ -12,8 +12,9 @@ For each of N pairs drawn (seed 0) from PAIRS (``source<TAB>target[<TAB>group]``
   ``basis_size``, one by one), started from the true correspondence: what the iterations at
   the final size do to a right map;
 * ``best at k``: no iteration at all: the functional maps of size k (from k + ``basis_margin``
-  eigenfunctions of the other shape, like the dense map's own) fitted by least squares to the
-  true correspondence of every listed vertex, read out by the dense map's own final step
+  eigenfunctions of the other shape, like the dense map's own) fitted by plain least squares
+  (without the commutativity shrinkage of the dense map's fits) to the true correspondence of
+  every listed vertex, read out by the dense map's own final step
   (:func:`darcyan.dense.maps.read_out_map`). No map read out of k eigenfunctions does much
   better: it bounds what ZoomOut could reach with this basis (and the ground truth's own
   rounding to vertices sets a floor under all).

@@ -482,6 +482,45 @@ def test_commutativity_shrinks_by_the_squared_relative_gap_of_the_eigenvalues():
     assert np.allclose(commutativity_shrinkage(7.0 * a, 7.0 * b, 4, 3, 2.0), factor)
     assert commutativity_shrinkage(a, b, 2, 3, 2.0).shape == (2, 3)
     assert (commutativity_shrinkage(a, b, 4, 3, 0.0) == 1.0).all()
+    # The constants' eigenvalue is 0 up to rounding only (0 on one shape, 2e-14 on another):
+    # still the same frequency, not a relative gap of 1.
+    rounded = commutativity_shrinkage(a, np.array([2e-14, 1.0, 4.0]), 4, 3, 2.0)
+    assert rounded[0, 0] == 1.0 and np.allclose(rounded, factor)
+
+
+def test_zoomout_shrinks_each_direction_by_its_own_eigenvalues():
+    # One step (basis_start == basis_size) returns the fits of the given maps: each shrunk with the
+    # eigenvalues of the shape it maps from as rows and of the other as columns.
+    from darcyan.dense.maps import _Fitter, commutativity_shrinkage, zoomout
+
+    rng = np.random.default_rng(5)
+    b_1, b_2 = rng.normal(size=(60, 14)), rng.normal(size=(50, 14))
+    map_12, map_21 = rng.integers(0, 50, 60), rng.integers(0, 60, 50)
+    v_1, v_2 = np.sort(rng.uniform(0, 10, 14)), np.sort(rng.uniform(20, 60, 14))
+    config = DenseConfig(basis_start=10, basis_size=10, basis_margin=4, margin_from=10, commutativity=3.0)
+    c_12, c_21 = zoomout(b_1, b_2, map_12, map_21, config, values_1=v_1, values_2=v_2)
+    plain_12, plain_21 = _Fitter(b_1).fit(b_2[map_12, :10], 14), _Fitter(b_2).fit(b_1[map_21, :10], 14)
+    assert np.allclose(c_12, plain_12 * commutativity_shrinkage(v_1, v_2, 14, 10, 3.0), atol=1e-12)
+    assert np.allclose(c_21, plain_21 * commutativity_shrinkage(v_2, v_1, 14, 10, 3.0), atol=1e-12)
+    assert not np.allclose(c_12, plain_12 * commutativity_shrinkage(v_2, v_1, 14, 10, 3.0), atol=1e-6)
+    unshrunk = zoomout(b_1, b_2, map_12, map_21, config)  # without eigenvalues: plain fits
+    assert np.allclose(unshrunk[0], plain_12, atol=1e-12) and np.allclose(unshrunk[1], plain_21, atol=1e-12)
+
+
+@pytest.mark.slow
+def test_the_dense_map_shrinks_its_fits_with_both_shapes_eigenvalues(figure_pair, monkeypatch):
+    import darcyan.dense.maps as maps
+
+    seen = []
+    real = maps.commutativity_shrinkage
+    monkeypatch.setattr(maps, "commutativity_shrinkage", lambda *a: seen.append(a[:2]) or real(*a))
+    shape_1, shape_2, matches = figure_pair
+    dense_map(shape_1, shape_2, matches, FAST)
+    want_1, want_2 = maps.dense_eigenvalues(shape_1.shape, FAST), maps.dense_eigenvalues(shape_2.shape, FAST)
+    assert seen and all(a is want_1 and b is want_2 or a is want_2 and b is want_1 for a, b in seen)
+    seen.clear()
+    dense_map(shape_1, shape_2, matches, dataclasses.replace(FAST, commutativity=0.0))
+    assert not seen
 
 
 def test_a_shrunk_fit_minimizes_the_commutativity_term_on_an_orthonormal_sample_basis():

@@ -61,6 +61,8 @@ DENSE_FAILURES = (DarcyanError, ArithmeticError, ValueError, RuntimeError, np.li
 MAX_EXHAUSTIVE_LANDMARKS = 24
 # Weight of the (normalized) descriptor distances when breaking ties between landmark sets.
 TIE_BREAK_WEIGHT = 1e-3
+# Eigenvalues below this share of the largest are the constant functions' 0 (rounding aside).
+ZERO_EIGENVALUE = 1e-9
 
 
 @dataclass(frozen=True)
@@ -71,8 +73,8 @@ class DenseConfig:
         method: ``"zoomout"``: geodesic landmark coordinates, then the bijective ZoomOut below;
             ``"pyfm"``: pyFM's functional map with the landmarks as descriptors, then its ZoomOut
             (``pip install 'darcyan[pyfm]'``; slower, the ``basis_*``, ``margin_from``, ``zoomout_samples``,
-            ``bijectivity``, ``orthogonality``, ``signature_weight``, ``signature_until`` and
-            ``ensemble`` fields do not apply).
+            ``bijectivity``, ``orthogonality``, ``signature_weight``, ``signature_until``,
+            ``commutativity`` and ``ensemble`` fields do not apply).
         landmarks: ``"consistent"``: keep the largest set of matches whose pairwise geodesic
             distances agree on both shapes (see ``consistency``); ``"all"``: every match.
         consistency: two matches agree when their geodesic distances on the two shapes differ by
@@ -96,9 +98,11 @@ class DenseConfig:
         ensemble: ZoomOut runs from this many independent draws of the samples (the first
             from ``seed``), combined by :func:`consensus_map` (per source vertex the medoid of
             the images; 1 or 2: one run, a medoid needs three).
-        bijectivity, orthogonality: weights of the bijectivity (``C_12 C_21 ~ I``) and
-            orthogonality (area preservation) terms beside the coupling term in ZoomOut's
-            nearest-neighbour searches (0 and 0 = plain ZoomOut).
+        bijectivity, orthogonality: scales of the bijectivity (the map b -> a undoes a -> b)
+            and orthogonality (area preservation) terms beside the coupling term in ZoomOut's
+            nearest-neighbour searches: each term's coordinates are multiplied by its scale, so
+            its squared residual weighs the square (bijectivity 2: 4; ``docs/parameters.md``).
+            0 and 0 = plain ZoomOut.
         landmark_weight: weight of the landmark coordinates (geodesic distances to the landmarks
             and, with ``orientation_weight``, their turns) beside the spectral terms in every
             ZoomOut step and in the final map: the landmarks hold the map throughout, not only
@@ -167,7 +171,7 @@ class DenseConfig:
     margin_from: int = 40
     zoomout_samples: int = 2000
     ensemble: int = 1
-    bijectivity: float = 1.0
+    bijectivity: float = 2.0
     orthogonality: float = 1.0
     landmark_weight: float = 3.0
     orientation_weight: float = 1.0
@@ -351,8 +355,12 @@ def commutativity_shrinkage(values_a: np.ndarray, values_b: np.ndarray, p: int, 
     Laplacian commutativity term ``s * weight * sum(r_ij^2 C_ij^2)``, at no cost beyond the
     fit. The relative gap, not the absolute one: between two bodies of unlike proportions the
     eigenvalues differ by a share, and an absolute penalty would leave the low frequencies free
-    and pin the high ones."""
-    a, b = np.abs(values_a[:p, None]), np.abs(values_b[None, :k])
+    and pin the high ones. Eigenvalues below ``ZERO_EIGENVALUE`` times the largest count as 0: the
+    constant functions' eigenvalue is 0 only up to rounding (0 on one shape, 2e-14 on another),
+    and its relative gap must not be read as 1."""
+    a, b = np.abs(values_a[:p]), np.abs(values_b[:k])
+    floor = ZERO_EIGENVALUE * max(a.max(initial=0.0), b.max(initial=0.0))
+    a, b = np.where(a > floor, a, 0.0)[:, None], np.where(b > floor, b, 0.0)[None, :]
     total = a + b
     relative = np.divide(a - b, total, out=np.zeros_like(total), where=total > 0)
     return 1.0 / (1.0 + weight * relative**2)
@@ -495,7 +503,8 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     ``map_12 (s_1,)`` indices of rows of ``basis_2`` (the current map 1 -> 2) and ``map_21
     (s_2,)`` the reverse. For k from ``config.basis_start`` to ``config.basis_size`` by
     ``config.basis_step``: fit the functional maps of both directions to the current
-    vertex maps (least squares), then update both vertex maps by nearest neighbours of the
+    vertex maps (least squares, each entry shrunk by :func:`commutativity_shrinkage` when the
+    eigenvalues are given), then update both vertex maps by nearest neighbours of the
     embeddings of :func:`map_embeddings` (ZoomOut, Melzi et al. 2019, with the bijectivity and
     orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*, 2021); each
     map is :func:`fit_width` x k (rectangular from ``config.margin_from`` on). ``coarse_i (s_i,
@@ -519,7 +528,7 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
         p = fit_width(k, config, columns)
         b1, b2 = basis_1[:, :p], basis_2[:, :p]
         c_12, c_21 = fit_1.fit(b2[map_12, :k], p), fit_2.fit(b1[map_21, :k], p)
-        if config.commutativity > 0 and values_1 is not None:
+        if config.commutativity > 0 and values_1 is not None and values_2 is not None:
             c_12 = c_12 * commutativity_shrinkage(values_1, values_2, p, k, config.commutativity)
             c_21 = c_21 * commutativity_shrinkage(values_2, values_1, p, k, config.commutativity)
         if i < len(sizes) - 1:

@@ -110,7 +110,7 @@ class Shape:
     def smooth_spectrum(self, k: int, proxy_vertices: int = 0, tol: float = 0.0, shift: float = SHIFT) -> Spectrum:
         """The eigenpairs behind :meth:`smooth_basis`: on a large mesh the coarse proxy's
         eigenvalues and its eigenvectors interpolated to the vertices (``mass``: the mesh's
-        vertex areas)."""
+        vertex areas; the interpolated vectors are then not mass-orthonormal)."""
         proxy = self.proxy(proxy_vertices) if proxy_vertices > 0 else None
         if proxy is None:
             return self.spectrum(k, tol, shift)
