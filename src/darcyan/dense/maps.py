@@ -330,20 +330,24 @@ def fit_width(k: int, config: DenseConfig, columns: int | None = None) -> int:
     return p if columns is None else min(p, columns)
 
 
-def dense_basis(shape, config: DenseConfig) -> np.ndarray:
-    """``(n, fit_width(basis_size))`` the shape's Laplace-Beltrami eigenvectors (built once per
-    shape; on the coarse proxy of a large mesh, see ``DenseConfig.basis_proxy_vertices``)."""
+def dense_spectrum(shape, config: DenseConfig):
+    """The shape's ``fit_width(basis_size)`` first Laplace-Beltrami eigenpairs (a
+    :class:`~darcyan.geometry.spectral.Spectrum`, built once per shape; on the coarse proxy of a
+    large mesh, see ``DenseConfig.basis_proxy_vertices``)."""
     size = fit_width(config.basis_size, config)
-    return shape.smooth_basis(min(size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
-                              tol=config.basis_tolerance, shift=EIGSH_SHIFT)
+    return shape.smooth_spectrum(min(size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
+                                 tol=config.basis_tolerance, shift=EIGSH_SHIFT)
+
+
+def dense_basis(shape, config: DenseConfig) -> np.ndarray:
+    """``(n, fit_width(basis_size))`` the eigenvectors of :func:`dense_spectrum`."""
+    return dense_spectrum(shape, config).vectors
 
 
 def dense_eigenvalues(shape, config: DenseConfig) -> np.ndarray:
-    """``(fit_width(basis_size),)`` the eigenvalues of :func:`dense_basis`'s eigenfunctions
-    (ascending; of the coarse proxy where the basis comes from it)."""
-    size = fit_width(config.basis_size, config)
-    return shape.smooth_spectrum(min(size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
-                                 tol=config.basis_tolerance, shift=EIGSH_SHIFT).values
+    """``(fit_width(basis_size),)`` the eigenvalues of :func:`dense_spectrum` (ascending; the
+    coarse proxy's where the basis comes from it)."""
+    return dense_spectrum(shape, config).values
 
 
 def commutativity_shrinkage(values_a: np.ndarray, values_b: np.ndarray, p: int, k: int, weight: float) -> np.ndarray:
@@ -604,6 +608,9 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         everywhere = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
         signature_1, signature_2 = signature_coordinates(shape_1, shape_2, config, *everywhere)
         steady_1, steady_2 = signature_turn_coordinates(shape_1, shape_2, config, fields_1, fields_2)
+        values = (None, None)  # the commutativity term's eigenvalues
+        if config.commutativity > 0:
+            values = dense_eigenvalues(shape_1, config), dense_eigenvalues(shape_2, config)
         maps = []
         for member in range(runs):
             if member > 0:
@@ -612,9 +619,6 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             first_21 = nearest_rows(coords_1[sample_1], coords_2[sample_2])
             coarse_1, coarse_2 = (None, None) if signature_1 is None else (signature_1[sample_1], signature_2[sample_2])
             turns = (None, None) if steady_1 is None else (steady_1[sample_1], steady_2[sample_2])
-            values = (None, None)
-            if config.commutativity > 0:
-                values = dense_eigenvalues(shape_1, config), dense_eigenvalues(shape_2, config)
             c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
                                  coords_1[sample_1], coords_2[sample_2], coarse_1, coarse_2, *turns, *values)
             maps.append(read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2,
