@@ -414,8 +414,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "one row per source vertex, seeded by the feature matches (geodesic landmark coordinates refined by ZoomOut)")
     p.add_argument("--ensemble", type=int, metavar="N",
                    help="with --dense: combine N ZoomOut runs from independent surface samples, per vertex the "
-                        "medoid of the N images (N >= 3; 1 or 2: one run, the default). With 3: 0.1-0.6 point more "
-                        "within 0.05, a match 1.5-1.9x as long (docs/parameters.md)")
+                        "medoid of the N images (N >= 3; 1 or 2: one run, the default). With 3: -0.2 to +0.6 point "
+                        "within 0.05, the mean error up to 5%% lower, a match 1.5-1.9x as long (docs/parameters.md)")
     verify = p.add_mutually_exclusive_group()
     verify.add_argument("--verify", action="store_true", help="weigh the feature matches against the other matchings "
                         "the orientation test considered by short dense maps (which keeps the shapes' curvature "
