@@ -125,6 +125,28 @@ def test_input_numbering_and_left_out_vertices():
     assert wrong.rate < 0.2
 
 
+@pytest.mark.slow
+def test_a_renumbered_target_gets_the_same_map(figure_pair):
+    """Farthest-point ZoomOut samples depend on where the vertices are, not on their numbering:
+    the map to a renumbered copy of the target is the map to the target, renumbered (a random
+    draw of samples changes a fifth of it)."""
+    config = DarcyanConfig()
+    shape_1, shape_2, matches = figure_pair
+    pose_1 = synthetic.figure(1)
+    perm = np.random.default_rng(3).permutation(pose_1.n_vertices)  # new vertex i is old vertex perm[i]
+    renumbered = analyze_mesh(Mesh(pose_1.vertices[perm], np.argsort(perm)[pose_1.faces], "figure1-renumbered"),
+                              config)
+    renumbered_matches = match_shapes(shape_1, renumbered, config)
+    assert np.array_equal(perm[renumbered_matches.target_vertex], matches.target_vertex)
+    agreement = {}
+    for sampling in ("farthest", "random"):
+        dense = dataclasses.replace(FAST, sampling=sampling)
+        direct = dense_map(shape_1, shape_2, matches, dense).target
+        agreement[sampling] = float((perm[dense_map(shape_1, renumbered, renumbered_matches, dense).target]
+                                     == direct).mean())
+    assert agreement["farthest"] >= 0.99 and agreement["random"] < 0.95, agreement
+
+
 def test_evaluate_dense_identity_and_shift(figure_pair):
     shape_1, shape_2, _ = figure_pair
     n = shape_1.n_input_vertices
@@ -762,3 +784,8 @@ def test_cli_ensemble_is_checked_before_any_work(small_pose_files, tmp_path, mon
     assert len(err) == 1 and "--ensemble" in err[0] and "ensemble must be a positive integer" in err[0]
     assert main(["match", *map(str, small_pose_files), "--ensemble", "3", "--no-cache"]) != 0
     assert "--dense maps only" in capsys.readouterr().err
+
+
+def test_bad_sampling_is_a_config_error():
+    with pytest.raises(ConfigError, match="sampling"):
+        DenseConfig(sampling="poisson")

@@ -1,9 +1,10 @@
-"""Vertex samples (darcyan.geometry.sampling): uniform over the surface, distinct, seeded."""
+"""Vertex samples (darcyan.geometry.sampling): random ones uniform over the surface, distinct,
+seeded; farthest-point ones spread evenly and independent of the numbering."""
 
 import numpy as np
 
 from darcyan.geometry.mesh import Mesh
-from darcyan.geometry.sampling import sample_vertices
+from darcyan.geometry.sampling import farthest_point_vertices, sample_vertices
 
 
 def test_samples_by_area_are_uniform_over_the_surface_not_the_vertices():
@@ -31,3 +32,45 @@ def test_samples_are_distinct_and_seeded(sphere):
     b = sample_vertices(sphere.n_vertices, 300, np.random.default_rng(1), areas)
     assert np.array_equal(a, b) and len(np.unique(a)) == 300
     assert len(sample_vertices(sphere.n_vertices, 10**6, np.random.default_rng(1), areas)) == sphere.n_vertices
+
+
+def test_farthest_points_on_a_line_halve_the_gaps():
+    # Points 0..16 on a line from 0: then 16, then 8, then 4 and 12 (ties: the smaller index).
+    line = np.stack([np.arange(17.0), np.zeros(17), np.zeros(17)], axis=1)
+    assert farthest_point_vertices(line, 5, 0).tolist() == [0, 16, 8, 4, 12]
+    assert len(farthest_point_vertices(line, 100, 3)) == 17  # at most every point, each once
+
+
+def test_farthest_points_cover_the_sphere_evenly(sphere):
+    # Gonzalez's bounds, measured by brute force: every vertex lies within r of the first k picks
+    # (r the distance of the next pick), and no two picks are closer than r.
+    order = farthest_point_vertices(sphere.vertices, 61, 0)
+    picks, following = sphere.vertices[order[:60]], sphere.vertices[order[60]]
+    r = np.linalg.norm(picks - following, axis=1).min()
+    to_picks = np.linalg.norm(sphere.vertices[:, None] - picks[None], axis=2)
+    assert to_picks.min(axis=1).max() <= r + 1e-12
+    between = np.linalg.norm(picks[:, None] - picks[None], axis=2) + np.eye(60) * 10
+    assert between.min() >= r - 1e-12
+    # A random draw of as many leaves a larger hole.
+    drawn = sphere.vertices[sample_vertices(sphere.n_vertices, 60, np.random.default_rng(0))]
+    assert np.linalg.norm(sphere.vertices[:, None] - drawn[None], axis=2).min(axis=1).max() > 1.2 * r
+
+
+def test_farthest_points_do_not_depend_on_the_numbering(sphere):
+    # Jittered: on the exact icosphere whole circles of vertices tie, and ties go by index.
+    points = sphere.vertices + np.random.default_rng(2).normal(scale=1e-3, size=sphere.vertices.shape)
+    order = np.random.default_rng(4).permutation(sphere.n_vertices)  # renumbered vertex i is order[i]
+    first = farthest_point_vertices(points, 200, 7)
+    again = farthest_point_vertices(points[order], 200, int(np.argsort(order)[7]))
+    assert np.array_equal(order[again], first)
+    # A random draw of the same count does depend on it.
+    rng = lambda: np.random.default_rng(0)  # noqa: E731
+    assert not np.array_equal(np.sort(order[sample_vertices(sphere.n_vertices, 200, rng())]),
+                              np.sort(sample_vertices(sphere.n_vertices, 200, rng())))
+
+
+def test_farthest_points_take_coincident_vertices_last_and_once():
+    # Four spots, the second twice (a vertex split where a mesh was not manifold).
+    points = np.array([[0, 0, 0], [1, 0, 0], [1, 0, 0], [3, 0, 0], [7, 0, 0]], dtype=float)
+    assert farthest_point_vertices(points, 5, 0).tolist() == [0, 4, 3, 1, 2]
+    assert farthest_point_vertices(points, 4, 0).tolist() == [0, 4, 3, 1]

@@ -45,11 +45,12 @@ import numpy as np
 from ..errors import ConfigError, DarcyanError
 from ..geometry.knn import nearest_rows, nearest_rows_near
 from ..geometry.mesh import Mesh
-from ..geometry.sampling import sample_vertices
+from ..geometry.sampling import farthest_point_vertices, sample_vertices
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
 
 LANDMARK_MODES = ("consistent", "all")
 METHODS = ("zoomout", "pyfm")
+SAMPLINGS = ("farthest", "random")  # DenseConfig.sampling
 UNMAPPED = -1  # source vertices the analysis left out (outside the largest component)
 # Shift of the shift-invert eigen solver (just below the zero eigenvalue of the Laplacian).
 EIGSH_SHIFT = -1e-8
@@ -72,9 +73,10 @@ class DenseConfig:
     Attributes:
         method: ``"zoomout"``: geodesic landmark coordinates, then the bijective ZoomOut below;
             ``"pyfm"``: pyFM's functional map with the landmarks as descriptors, then its ZoomOut
-            (``pip install 'darcyan[pyfm]'``; slower, the ``basis_*``, ``margin_from``, ``zoomout_samples``,
-            ``bijectivity``, ``orthogonality``, ``signature_weight``, ``signature_until``,
-            ``commutativity`` and ``ensemble`` fields do not apply).
+            (``pip install 'darcyan[pyfm]'``; slower, the ``basis_*``, ``margin_from``,
+            ``zoomout_samples``, ``sampling``, ``bijectivity``, ``orthogonality``,
+            ``signature_weight``, ``signature_until``, ``commutativity`` and ``ensemble`` fields do
+            not apply).
         landmarks: ``"consistent"``: keep the largest set of matches whose pairwise geodesic
             distances agree on both shapes (see ``consistency``); ``"all"``: every match.
         consistency: two matches agree when their geodesic distances on the two shapes differ by
@@ -93,11 +95,16 @@ class DenseConfig:
             score the seeds keep square maps.
         margin_from: the smallest size of ZoomOut that gets the margin (from the first size on,
             three FAUST maps of 40 lost 2-6 points).
-        zoomout_samples: ZoomOut iterates on this many random surface samples of each shape
-            (0 = on all vertices); the final map is always computed for every source vertex.
-        ensemble: ZoomOut runs from this many independent draws of the samples (the first
-            from ``seed``), combined by :func:`consensus_map` (per source vertex the medoid of
-            the images; 1 or 2: one run, a medoid needs three).
+        zoomout_samples: ZoomOut iterates on this many surface samples of each shape (0 = on
+            all vertices); the final map is always computed for every source vertex.
+        sampling: how they are chosen: ``"farthest"``, farthest-point samples (spread evenly, and
+            the same whatever the vertices' numbering: a renumbered file gets the same map);
+            ``"random"``, drawn by area with ``seed`` (the default until 2026-12-03;
+            ``docs/parameters.md``).
+        ensemble: ZoomOut runs from this many different samples (the first as ``sampling``
+            says, the others independent random draws, from ``seed``), combined by
+            :func:`consensus_map` (per source vertex the medoid of the images; 1 or 2: one run, a
+            medoid needs three).
         bijectivity, orthogonality: scales of the bijectivity (the map b -> a undoes a -> b)
             and orthogonality (area preservation) terms beside the coupling term in ZoomOut's
             nearest-neighbour searches: each term's coordinates are multiplied by its scale, so
@@ -157,7 +164,8 @@ class DenseConfig:
             bodies a point map's noise spreads over all the entries, and a plain fit carries it
             into the next step. 0: plain ZoomOut fits. The short ZoomOuts that score the seeds
             fit without it (``docs/parameters.md``).
-        seed: seed of the surface samples.
+        seed: seed of the random surface samples (``sampling`` ``"random"``, and the other
+            members of an ensemble).
     """
 
     method: str = "zoomout"
@@ -170,6 +178,7 @@ class DenseConfig:
     basis_margin: int = 10
     margin_from: int = 40
     zoomout_samples: int = 2000
+    sampling: str = "farthest"
     ensemble: int = 1
     bijectivity: float = 2.0
     orthogonality: float = 1.0
@@ -194,6 +203,8 @@ class DenseConfig:
     def __post_init__(self) -> None:
         if self.method not in METHODS:
             raise ConfigError(f"dense: method must be one of {METHODS}, got {self.method!r}")
+        if self.sampling not in SAMPLINGS:
+            raise ConfigError(f"dense: sampling must be one of {SAMPLINGS}, got {self.sampling!r}")
         if self.landmarks not in LANDMARK_MODES:
             raise ConfigError(f"dense: landmarks must be one of {LANDMARK_MODES}, got {self.landmarks!r}")
         for name in ("basis_start", "basis_size", "basis_step", "local_search_reach", "candidates", "seed_basis",
@@ -307,11 +318,34 @@ def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float
 
 
 def zoomout_sample(shape, config: DenseConfig, member: int = 0) -> np.ndarray:
-    """``(zoomout_samples,)`` the vertices ZoomOut iterates on, drawn by area, sorted: seed
-    ``config.seed`` for the first ZoomOut, ``(config.seed, member)`` for the other members of
-    the ensemble (``config.ensemble``)."""
-    rng = np.random.default_rng(config.seed if member == 0 else (config.seed, member))
-    return np.sort(sample_vertices(shape.mesh.n_vertices, config.zoomout_samples, rng, shape.vertex_areas))
+    """``(zoomout_samples,)`` the vertices ZoomOut iterates on, in their order of priority (the
+    seeds' short ZoomOuts take a spread subset, :func:`seed_subset`). The first ZoomOut's, with
+    ``config.sampling`` ``"farthest"``: in farthest-point order
+    (:func:`~darcyan.geometry.sampling.farthest_point_vertices`) from the vertex farthest from
+    the area centroid. Otherwise (``"random"``, or another member of the ensemble,
+    ``config.ensemble``, which needs samples of its own): drawn by area with seed ``config.seed``
+    (``(config.seed, member)`` for the other members), sorted."""
+    if config.sampling == "random" or member > 0:
+        rng = np.random.default_rng(config.seed if member == 0 else (config.seed, member))
+        return np.sort(sample_vertices(shape.mesh.n_vertices, config.zoomout_samples, rng, shape.vertex_areas))
+
+    def farthest():
+        positions, areas = shape.mesh.vertices, shape.vertex_areas
+        centroid = areas @ positions / areas.sum()
+        start = int(np.argmax(((positions - centroid) ** 2).sum(axis=1)))
+        return farthest_point_vertices(positions, config.zoomout_samples, start)
+
+    return shape.derived(("zoomout_sample", config.zoomout_samples), farthest)
+
+
+def seed_subset(sample: np.ndarray, count: int, config: DenseConfig) -> np.ndarray:
+    """``(min(count, s),)`` of a :func:`zoomout_sample` ``(s,)`` that the seeds' short ZoomOuts run
+    on: its first ``count`` (a farthest-point sample of its own), or, of a sorted random sample,
+    every so many."""
+    count = min(count, len(sample))
+    if config.sampling == "random":
+        return sample[np.linspace(0, len(sample) - 1, count).astype(np.int64)]
+    return sample[:count]
 
 
 def zoomout_samples(shape_1, shape_2, config: DenseConfig, member: int = 0) -> tuple:
@@ -840,8 +874,7 @@ class _SeedScoring:
                                           basis_margin=0)
         self.points = []
         for sample in samples:
-            count = min(config.seed_samples, len(sample))
-            self.points.append(sample[np.linspace(0, len(sample) - 1, count).astype(np.int64)])
+            self.points.append(seed_subset(sample, config.seed_samples, config))
         self.bases = [basis[points, :self.config.basis_size] for basis, points in zip(bases, self.points)]
         self.signatures = [point_signature(shape, config)[points] for shape, points in zip((shape_1, shape_2),
                                                                                           self.points)]
