@@ -789,3 +789,23 @@ def test_cli_ensemble_is_checked_before_any_work(small_pose_files, tmp_path, mon
 def test_bad_sampling_is_a_config_error():
     with pytest.raises(ConfigError, match="sampling"):
         DenseConfig(sampling="poisson")
+
+
+@pytest.mark.slow
+def test_cli_farthest_sampling_maps_a_renumbered_file_alike(small_pose_files, tmp_path, capsys):
+    source, target = small_pose_files
+    pose_1 = load_mesh(target)
+    perm = np.random.default_rng(8).permutation(pose_1.n_vertices)  # renumbered vertex i is vertex perm[i]
+    renumbered = tmp_path / "figure1-renumbered.off"
+    save_mesh(Mesh(pose_1.vertices[perm], np.argsort(perm)[pose_1.faces]), renumbered)
+    maps = []
+    for path in (target, renumbered):
+        out = tmp_path / f"{path.stem}.csv"
+        assert main(["match", str(source), str(path), "--dense", "--sampling", "farthest", "-o", str(out),
+                     "--quiet"]) == 0
+        maps.append(np.loadtxt(out, delimiter=",", skiprows=1, dtype=np.int64)[:, 1])
+    assert np.array_equal(perm[maps[1]], maps[0])
+    capsys.readouterr()
+    assert main(["match", str(source), str(target), "--sampling", "farthest", "--no-cache"]) != 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--sampling applies to --dense maps only" in err[0]

@@ -7,6 +7,7 @@ and exit status 2; warnings (components left out, polygons split) are one line e
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import warnings
 from pathlib import Path
@@ -123,8 +124,9 @@ def cmd_match(args: argparse.Namespace) -> int:
     if several and (args.plot or args.html or args.truth):
         raise DarcyanError("--plot, --html and --truth take one target: match the targets one by one")
     dense_config = None
-    if args.ensemble is not None and not args.dense:
-        raise DarcyanError("--ensemble applies to --dense maps only")
+    for option, value in (("--ensemble", args.ensemble), ("--sampling", args.sampling)):
+        if value is not None and not args.dense:
+            raise DarcyanError(f"{option} applies to --dense maps only")
     if args.dense:
         from .dense.maps import DenseConfig
 
@@ -132,6 +134,8 @@ def cmd_match(args: argparse.Namespace) -> int:
             dense_config = DenseConfig() if args.ensemble is None else DenseConfig(ensemble=args.ensemble)
         except ConfigError as exc:
             raise ConfigError(f"--ensemble: {exc}") from None
+        if args.sampling is not None:
+            dense_config = dataclasses.replace(dense_config, sampling=args.sampling)
     if several and args.dense:
         _dense_folder(args.output, targets)
     form = _output_format(args)
@@ -416,6 +420,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="with --dense: combine N ZoomOut runs from independent surface samples, per vertex the "
                         "medoid of the N images (N >= 3; 1 or 2: one run, the default). With 3: -0.2 to +0.6 point "
                         "within 0.05, the mean error up to 5%% lower, a match 1.5-1.9x as long (docs/parameters.md)")
+    p.add_argument("--sampling", choices=("random", "farthest"),
+                   help="with --dense: the samples ZoomOut iterates on, drawn at random by area (the default) or "
+                        "farthest-point samples, with which the map does not depend on the vertices' numbering "
+                        "(docs/parameters.md)")
     verify = p.add_mutually_exclusive_group()
     verify.add_argument("--verify", action="store_true", help="weigh the feature matches against the other matchings "
                         "the orientation test considered by short dense maps (which keeps the shapes' curvature "
