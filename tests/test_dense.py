@@ -809,3 +809,19 @@ def test_cli_farthest_sampling_maps_a_renumbered_file_alike(small_pose_files, tm
     assert main(["match", str(source), str(target), "--sampling", "farthest", "--no-cache"]) != 0
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--sampling applies to --dense maps only" in err[0]
+
+
+def test_farthest_seed_points_are_spread_when_zoomout_runs_on_every_vertex(figure_poses):
+    from darcyan.dense.maps import seed_subset, zoomout_samples
+    from darcyan.geometry.sampling import farthest_point_vertices
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(figure_poses[0])
+    config = DenseConfig(sampling="farthest", zoomout_samples=0)
+    every, _ = zoomout_samples(shape, shape, config)
+    assert np.array_equal(every, np.arange(shape.n_vertices))
+    points = seed_subset(shape, every, 300, config)
+    assert np.array_equal(points[:10], farthest_point_vertices(shape.mesh.vertices, 10, int(points[0])))
+    sampled = DenseConfig(sampling="farthest", zoomout_samples=1000)
+    first = zoomout_samples(shape, shape, sampled)[0]
+    assert np.array_equal(seed_subset(shape, first, 300, sampled), first[:300])

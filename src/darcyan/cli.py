@@ -162,13 +162,14 @@ def cmd_match(args: argparse.Namespace) -> int:
                 source_shape = load_shape(args.source, config, args.repair, warn=False)
             shapes = [source_shape, load_shape(target, config, args.repair, warn=False)]
         if verify:
-            from .dense.maps import DENSE_FAILURES, verified_matches
+            from .dense.maps import DENSE_FAILURES, DenseConfig, verified_matches
 
             why = "" if args.verify else (f" (in doubt: the orientation test's margin {correspondence.margin:.2f} "
                                           f"< {config.mirror.verify_below:g})")
             say(f"verifying the matches{why}")
             try:
-                correspondence, about = verified_matches(shapes[0], shapes[1], correspondence)
+                correspondence, about = verified_matches(shapes[0], shapes[1], correspondence,
+                                                         dense_config or DenseConfig())
                 print(f"darcyan: {target}: verified{why}: {_seed_verdict(about)}", file=sys.stderr)
             except DENSE_FAILURES as exc:
                 print(f"darcyan: warning: {target}: the matches were not verified: {exc}", file=sys.stderr)
@@ -423,7 +424,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--sampling", choices=("random", "farthest"),
                    help="with --dense: the samples ZoomOut iterates on, drawn at random by area (the default) or "
                         "farthest-point samples, with which the map does not depend on the vertices' numbering "
-                        "(docs/parameters.md)")
+                        "(but for --ensemble's other runs, which draw at random; docs/parameters.md)")
     verify = p.add_mutually_exclusive_group()
     verify.add_argument("--verify", action="store_true", help="weigh the feature matches against the other matchings "
                         "the orientation test considered by short dense maps (which keeps the shapes' curvature "

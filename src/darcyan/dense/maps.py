@@ -97,11 +97,6 @@ class DenseConfig:
             three FAUST maps of 40 lost 2-6 points).
         zoomout_samples: ZoomOut iterates on this many surface samples of each shape (0 = on
             all vertices); the final map is always computed for every source vertex.
-        sampling: how they are chosen: ``"random"``, drawn by area with ``seed``;
-            ``"farthest"``, farthest-point samples (spread evenly, and the same whatever the
-            vertices' numbering: a renumbered or re-welded file gets the same map). Farthest
-            points gained a little on FAUST but lost one tosca-hires map (michael0 -> 10: 99.0%
-            -> 88.8% within 0.05), so random stays the default (``docs/parameters.md``).
         ensemble: ZoomOut runs from this many different samples (the first as ``sampling``
             says, the others independent random draws, from ``seed``), combined by
             :func:`consensus_map` (per source vertex the medoid of the images; 1 or 2: one run, a
@@ -167,6 +162,12 @@ class DenseConfig:
             fit without it (``docs/parameters.md``).
         seed: seed of the random surface samples (``sampling`` ``"random"``, and the other
             members of an ensemble).
+        sampling: how the ``zoomout_samples`` are chosen: ``"random"``, drawn by area with
+            ``seed``; ``"farthest"``, farthest-point samples (spread evenly, and the same whatever
+            the vertices' numbering: a renumbered or re-welded file gets the same map; the other
+            members of an ensemble still draw at random). Farthest points gained a little on
+            FAUST but lost one tosca-hires map (michael0 -> 10: 99.0% -> 88.8% within 0.05), so
+            random stays the default (``docs/parameters.md``).
     """
 
     method: str = "zoomout"
@@ -179,7 +180,6 @@ class DenseConfig:
     basis_margin: int = 10
     margin_from: int = 40
     zoomout_samples: int = 2000
-    sampling: str = "random"
     ensemble: int = 1
     bijectivity: float = 2.0
     orthogonality: float = 1.0
@@ -200,6 +200,7 @@ class DenseConfig:
     local_search_reach: int = 16
     commutativity: float = 3.0
     seed: int = 0
+    sampling: str = "random"
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -339,13 +340,16 @@ def zoomout_sample(shape, config: DenseConfig, member: int = 0) -> np.ndarray:
     return shape.derived(("zoomout_sample", config.zoomout_samples), farthest)
 
 
-def seed_subset(sample: np.ndarray, count: int, config: DenseConfig) -> np.ndarray:
-    """``(min(count, s),)`` of a :func:`zoomout_sample` ``(s,)`` that the seeds' short ZoomOuts run
-    on: its first ``count`` (a farthest-point sample of its own), or, of a sorted random sample,
-    every so many."""
+def seed_subset(shape, sample: np.ndarray, count: int, config: DenseConfig) -> np.ndarray:
+    """``(min(count, s),)`` vertices of ``shape`` that the seeds' short ZoomOuts run on, given its
+    ZoomOut sample ``(s,)``: of a sorted random sample, every so many; of a farthest-point sample,
+    its first ``count`` (a farthest-point sample of its own), and, when ZoomOut runs on every
+    vertex, ``count`` farthest points of the shape."""
     count = min(count, len(sample))
     if config.sampling == "random":
         return sample[np.linspace(0, len(sample) - 1, count).astype(np.int64)]
+    if len(sample) == shape.mesh.n_vertices:  # every vertex, in index order: not spread
+        return zoomout_sample(shape, dataclasses.replace(config, zoomout_samples=count))
     return sample[:count]
 
 
@@ -866,16 +870,15 @@ def landmark_coordinates(shape_1, shape_2, matching, config: DenseConfig = Dense
 
 class _SeedScoring:
     """What scoring a seed needs, built once per pair: ``seed_samples`` of the ZoomOut samples
-    (every so many of them: a random subset drawn by area like them), the bases there and the
-    point signatures."""
+    (:func:`seed_subset`), the bases there and the point signatures."""
 
     def __init__(self, shape_1, shape_2, config: DenseConfig, samples: tuple, bases: tuple):
         size = min(config.seed_basis, config.basis_size)
         self.config = dataclasses.replace(config, basis_size=size, basis_start=min(config.basis_start, size),
                                           basis_margin=0)
         self.points = []
-        for sample in samples:
-            self.points.append(seed_subset(sample, config.seed_samples, config))
+        for shape, sample in zip((shape_1, shape_2), samples):
+            self.points.append(seed_subset(shape, sample, config.seed_samples, config))
         self.bases = [basis[points, :self.config.basis_size] for basis, points in zip(bases, self.points)]
         self.signatures = [point_signature(shape, config)[points] for shape, points in zip((shape_1, shape_2),
                                                                                           self.points)]
