@@ -324,7 +324,7 @@ def zoomout_sample(shape, config: DenseConfig, member: int = 0) -> np.ndarray:
     seeds' short ZoomOuts take a spread subset, :func:`seed_subset`). The first ZoomOut's, with
     ``config.sampling`` ``"farthest"``: in farthest-point order
     (:func:`~darcyan.geometry.sampling.farthest_point_vertices`) from the vertex farthest from
-    the area centroid. Otherwise (``"random"``, or another member of the ensemble,
+    the area centroid (the origin of the prepared mesh). Otherwise (``"random"``, or another member of the ensemble,
     ``config.ensemble``, which needs samples of its own): drawn by area with seed ``config.seed``
     (``(config.seed, member)`` for the other members), sorted."""
     if config.sampling == "random" or member > 0:
@@ -332,9 +332,8 @@ def zoomout_sample(shape, config: DenseConfig, member: int = 0) -> np.ndarray:
         return np.sort(sample_vertices(shape.mesh.n_vertices, config.zoomout_samples, rng, shape.vertex_areas))
 
     def farthest():
-        positions, areas = shape.mesh.vertices, shape.vertex_areas
-        centroid = areas @ positions / areas.sum()
-        start = int(np.argmax(((positions - centroid) ** 2).sum(axis=1)))
+        positions = shape.mesh.vertices  # centred on the area centroid by the preparation
+        start = int(np.argmax((positions**2).sum(axis=1)))
         return farthest_point_vertices(positions, config.zoomout_samples, start)
 
     return shape.derived(("zoomout_sample", config.zoomout_samples), farthest)
