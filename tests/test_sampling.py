@@ -2,7 +2,9 @@
 seeded; farthest-point ones spread evenly and independent of the numbering."""
 
 import numpy as np
+import pytest
 
+from darcyan.errors import DarcyanError
 from darcyan.geometry.mesh import Mesh
 from darcyan.geometry.sampling import farthest_point_vertices, sample_vertices
 
@@ -39,6 +41,9 @@ def test_farthest_points_on_a_line_halve_the_gaps():
     line = np.stack([np.arange(17.0), np.zeros(17), np.zeros(17)], axis=1)
     assert farthest_point_vertices(line, 5, 0).tolist() == [0, 16, 8, 4, 12]
     assert sorted(farthest_point_vertices(line, 100, 3)) == list(range(17))  # every point, each once
+    for start in (-1, 17):
+        with pytest.raises(DarcyanError, match="start vertex"):
+            farthest_point_vertices(line, 5, start)
 
 
 def test_farthest_points_cover_the_sphere_evenly(sphere):

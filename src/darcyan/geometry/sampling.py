@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import DarcyanError
+
 
 def sample_vertices(n: int, count: int, rng: np.random.Generator, areas: np.ndarray | None = None) -> np.ndarray:
     """``(min(count, n),)`` distinct vertices of ``n`` drawn with probability proportional to
@@ -27,6 +29,8 @@ def farthest_point_vertices(positions: np.ndarray, count: int, start: int) -> np
     from scipy.spatial import cKDTree
 
     positions = np.ascontiguousarray(positions, dtype=np.float64)
+    if not 0 <= int(start) < len(positions):
+        raise DarcyanError(f"farthest points: start vertex {start} is not one of the {len(positions)} vertices")
     count = min(int(count), len(positions))
     out = np.empty(count, dtype=np.int64)
     nearest = np.full(len(positions), np.inf)  # squared distance to the nearest pick
