@@ -1,17 +1,27 @@
-"""Accuracy under vertex noise and coarser meshes (issue: trustworthy input).
+"""Accuracy under vertex noise and other meshings of the same surfaces (issue: trustworthy input).
 
 Makes perturbed copies of a dataset laid out like ``tosca-5k`` (meshes + ``corres/*.vts``) in
 ``--out/meshes`` and runs ``darcyan bench`` on each (``--resume``: a second run reuses them):
 
-- Gaussian noise on every vertex, of standard deviation 0.1%, 0.5% and 1% of the bounding-box
-  diagonal (vertex numbering kept, so the ground truth files stay valid);
-- decimation to half the faces (fast-simplification; the few faces it leaves on non-manifold
-  edges are dropped); each ground-truth sample moves to the nearest remaining vertex.
+- ``noise=L``: Gaussian noise on every vertex, of standard deviation L = 0.1%, 0.5% and 1% of the
+  bounding-box diagonal (vertex numbering kept, so the ground truth files stay valid);
+- ``decimated``: decimation to half the faces (fast-simplification; the few faces it leaves on
+  non-manifold edges are dropped); each ground-truth sample moves to the nearest remaining vertex;
+- ``subdivided``: every triangle split in four at its edge midpoints (the same surface, four
+  times the faces; vertex numbering kept for the original vertices).
+
+Every shape of the dataset is perturbed independently (a decimated source is matched to a
+decimated target with its own triangles). Moving a ground-truth sample to the nearest remaining
+vertex costs up to half an edge of the coarser mesh: dense mean errors on decimated meshes carry
+that rounding.
 
     python benchmarks/robustness.py ../shared/data/tosca-5k --pairs benchmarks/sweep_pairs_tosca5k.txt --out robustness
+    python benchmarks/robustness.py ../shared/data/faust-5k --pairs benchmarks/faust5k_test_pairs_groups.txt \
+        --conditions decimated subdivided --dense --jobs 2 --out robustness-faust
 
 Prints the per-class-mean strict rate (per source feature), rate with flips and repeatability
-for each condition and writes ``robustness.json`` in ``--out``.
+for each condition (with ``--dense``, also each group's share of dense samples within 0.05 and
+mean geodesic error) and writes ``robustness.json`` in ``--out``.
 """
 
 from __future__ import annotations
@@ -31,6 +41,7 @@ from darcyan.geometry.mesh import Mesh
 
 NOISE_LEVELS = (0.001, 0.005, 0.01)  # fractions of the bounding-box diagonal
 DECIMATION = 0.5  # fraction of the faces kept
+CONDITIONS = ("clean",) + tuple(f"noise={level}" for level in NOISE_LEVELS) + ("decimated", "subdivided")
 
 
 def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0) -> None:
@@ -50,6 +61,11 @@ def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0)
             v, f = fast_simplification.simplify(mesh.vertices, mesh.faces, target_reduction=1 - DECIMATION)
             f = without_nonmanifold_edges(f)
             remap = cKDTree(v).query(mesh.vertices)[1]  # each old vertex -> nearest kept vertex
+            mesh = Mesh(v, f)
+        elif condition == "subdivided":
+            import trimesh
+
+            v, f = trimesh.remesh.subdivide(mesh.vertices, mesh.faces)  # keeps the old vertices first
             mesh = Mesh(v, f)
         save_mesh(mesh, target / path.name)
         for suffix in (".vts", ".sym.vts"):
@@ -78,8 +94,15 @@ def without_nonmanifold_edges(faces: np.ndarray) -> np.ndarray:
 def summary(results: dict) -> dict:
     classes = results["methods"]["darcyan"]["classes"].values()
     mean = lambda values: float(np.mean([v for v in values if v is not None]))  # noqa: E731
-    return {"rate_per_feature": mean(c["correct"] / c["features"] for c in classes if c["features"]),
-            "rate_sym": mean(c["rate_sym"] for c in classes), "repeatability": mean(c["repeatability"] for c in classes)}
+    row = {"rate_per_feature": mean(c["correct"] / c["features"] for c in classes if c["features"]),
+           "rate_sym": mean(c["rate_sym"] for c in classes), "repeatability": mean(c["repeatability"] for c in classes)}
+    dense = results.get("dense", {}).get("darcyan")
+    if dense:
+        groups = dense.get("groups") or {}
+        row["dense"] = {name: {key: part.get(key) for key in ("pairs", "samples", "within", "rate", "mean_error",
+                                                               "untrusted", "seconds_per_pair")}
+                        for name, part in [("overall", dense["overall"]), *groups.items()]}
+    return row
 
 
 def main(argv=None) -> int:
@@ -88,12 +111,14 @@ def main(argv=None) -> int:
     parser.add_argument("--pairs")
     parser.add_argument("--out", default="robustness-out")
     parser.add_argument("--jobs", type=int, default=1)
+    parser.add_argument("--conditions", nargs="+", choices=CONDITIONS, default=CONDITIONS[:-1],
+                        help="which copies to make and bench (default: clean, the noise levels, decimated)")
+    parser.add_argument("--dense", action="store_true", help="also dense maps (darcyan bench --dense)")
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    conditions = ["clean"] + [f"noise={level}" for level in NOISE_LEVELS] + ["decimated"]
     rows = {}
-    for condition in conditions:
+    for condition in args.conditions:
         # The perturbed meshes are kept in --out, so that an interrupted run resumes.
         folder = Path(args.dataset) if condition == "clean" else out / "meshes" / condition
         if condition != "clean" and not (folder / "done").exists():
@@ -101,11 +126,14 @@ def main(argv=None) -> int:
             (folder / "done").touch()
         # Decimation can leave duplicate faces: drop them as `--repair` would.
         result = run_bench(folder, out / condition, ("darcyan",), args.pairs, config=DarcyanConfig(),
-                           jobs=args.jobs, resume=True, repair=condition == "decimated", plots=False,
-                           progress=False)
-        rows[condition] = summary(result.results)
-        print(f"{condition:<12} strict {rows[condition]['rate_per_feature']:.3f}  with flips "
-              f"{rows[condition]['rate_sym']:.3f}  repeatability {rows[condition]['repeatability']:.3f}", flush=True)
+                           jobs=args.jobs, resume=True, repair=condition == "decimated",
+                           plots=False, progress=False, dense=args.dense)
+        rows[condition] = row = summary(result.results)
+        print(f"{condition:<12} strict {row['rate_per_feature']:.3f}  with flips "
+              f"{row['rate_sym']:.3f}  repeatability {row['repeatability']:.3f}", flush=True)
+        for name, part in row.get("dense", {}).items():
+            print(f"{'':<12} dense {name}: {part['within']} of {part['samples']} within 0.05 ({part['rate']:.4f}), "
+                  f"mean error {part['mean_error']:.4f}, {part['untrusted']} not trusted", flush=True)
         (out / "robustness.json").write_text(json.dumps(rows, indent=1))
     return 0
 

@@ -1,0 +1,60 @@
+"""The remeshed copies that ``benchmarks/robustness.py`` benches darcyan on are the meshes it says
+(half the faces, ground truth at the vertex nearest the original one; four times the faces on the
+same surface, numbering and ground truth kept)."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from darcyan.geometry import synthetic
+from darcyan.geometry.mesh import Mesh
+from darcyan.io.mesh_files import load_mesh, save_mesh
+
+SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "robustness.py"
+
+
+@pytest.fixture(scope="module")
+def robustness():
+    spec = importlib.util.spec_from_file_location("robustness_bench", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    """An ellipsoid (widest along x) with a ground-truth file of every 7th vertex (one-based)."""
+    folder = tmp_path_factory.mktemp("source")
+    sphere = synthetic.icosphere(subdivisions=4)
+    save_mesh(Mesh(sphere.vertices * [1.5, 1.0, 1.0], sphere.faces), folder / "egg.off")
+    (folder / "corres").mkdir()
+    lines = np.arange(0, sphere.n_vertices, 7)
+    np.savetxt(folder / "corres" / "egg.vts", lines + 1, fmt="%d")
+    return folder
+
+
+def copy(robustness, dataset, tmp_path, condition):
+    robustness.perturbed_dataset(dataset, tmp_path, condition)
+    return load_mesh(tmp_path / "egg.off"), np.loadtxt(tmp_path / "corres" / "egg.vts", dtype=np.int64) - 1
+
+
+def test_decimated_copy_has_half_the_faces_and_truth_at_the_nearest_vertex(robustness, dataset, tmp_path):
+    original = load_mesh(dataset / "egg.off")
+    mesh, truth = copy(robustness, dataset, tmp_path, "decimated")
+    assert abs(mesh.n_faces / original.n_faces - 0.5) < 0.02
+    lines = np.loadtxt(dataset / "corres" / "egg.vts", dtype=np.int64) - 1
+    gaps = np.linalg.norm(mesh.vertices[None, :, :] - original.vertices[lines][:, None, :], axis=2)
+    assert np.array_equal(truth, gaps.argmin(axis=1))
+
+
+def test_subdivided_copy_keeps_the_surface_and_the_numbering(robustness, dataset, tmp_path):
+    original = load_mesh(dataset / "egg.off")
+    mesh, truth = copy(robustness, dataset, tmp_path, "subdivided")
+    assert mesh.n_faces == 4 * original.n_faces
+    assert np.array_equal(mesh.vertices[:original.n_vertices], original.vertices)
+    assert np.isclose(mesh.area(), original.area())
+    assert np.array_equal(truth, np.loadtxt(dataset / "corres" / "egg.vts", dtype=np.int64) - 1)
