@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from darcyan.geometry import synthetic
 from darcyan.geometry.mesh import Mesh
@@ -56,5 +57,12 @@ def test_subdivided_copy_keeps_the_surface_and_the_numbering(robustness, dataset
     mesh, truth = copy(robustness, dataset, tmp_path, "subdivided")
     assert mesh.n_faces == 4 * original.n_faces
     assert np.array_equal(mesh.vertices[:original.n_vertices], original.vertices)
+    # every new vertex is the midpoint of an edge of the original mesh: the same surface
+    e = original.edges()
+    midpoints = 0.5 * (original.vertices[e[:, 0]] + original.vertices[e[:, 1]])
+    new = mesh.vertices[original.n_vertices:]
+    assert len(new) == len(e)
+    gaps = cKDTree(midpoints).query(new)[0]
+    assert gaps.max() < 1e-6  # the OFF file rounds coordinates; edges are about 0.05 long
     assert np.isclose(mesh.area(), original.area())
     assert np.array_equal(truth, np.loadtxt(dataset / "corres" / "egg.vts", dtype=np.int64) - 1)
