@@ -108,3 +108,18 @@ def test_without_an_estimate_fields_and_balls_are_the_whole_mesh(sphere):
     local = LocalGeodesicSolver(solver, 0.5)
     np.testing.assert_array_equal(local.distance(7), solver.distance(7))
     assert local.ball(7).mesh is mesh and local.ball(7).solver is solver
+
+
+def test_a_source_out_of_range_is_an_error_not_a_hang(sphere):
+    # potpourri3d's fast marching from vertex -1 never returns (seen 2026-12-04): checked before it.
+    import pytest
+
+    from darcyan.errors import MeshError
+
+    solver = GeodesicSolver(sphere)
+    for call in (lambda: solver.distance(-1), lambda: solver.distance(sphere.n_vertices),
+                 lambda: solver.distance_from_points([(len(sphere.faces), [1 / 3, 1 / 3, 1 / 3])]),
+                 lambda: solver.trace(-1, np.array([1.0, 0, 0]), 0.1)):
+        with pytest.raises(MeshError, match="out of range"):
+            call()
+    assert np.isclose(solver.distance(sphere.n_vertices - 1).min(), 0.0)  # the last vertex is in range

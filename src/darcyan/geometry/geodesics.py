@@ -58,7 +58,17 @@ class GeodesicSolver:
 
     def distance_from_points(self, points: list) -> np.ndarray:
         """``(n,)`` distance to the nearest of surface ``points``, each ``(face, [b0, b1, b2])``
-        (barycentric coordinates) or ``(vertex, [])``."""
+        (barycentric coordinates) or ``(vertex, [])``.
+
+        Raises:
+            MeshError: naming the mesh, for an index out of range (potpourri3d would not return).
+        """
+        for index, weights in points:
+            limit = len(self.mesh.faces) if len(weights) else self.mesh.n_vertices
+            if not 0 <= int(index) < limit:
+                kind = "face" if len(weights) else "vertex"
+                raise MeshError(self.mesh.name, f"geodesic distance from {kind} {int(index)}: out of range "
+                                                f"(the mesh has {limit} {kind}{'s' if kind == 'face' else 'es'})")
         d = self._fmm.compute_distance([[p] for p in points])
         return np.asarray(d, dtype=np.float64).reshape(-1)
 
@@ -66,6 +76,9 @@ class GeodesicSolver:
         """The straightest geodesic from ``vertex`` leaving along ``direction`` (3D, projected to
         the tangent plane) for ``length``: ``(k, 3)`` points, the first at the vertex, the others
         where it crosses edges; shorter when it reaches a boundary."""
+        if not 0 <= int(vertex) < self.mesh.n_vertices:
+            raise MeshError(self.mesh.name, f"geodesic from vertex {int(vertex)}: out of range "
+                                            f"(the mesh has {self.mesh.n_vertices} vertices)")
         if self._tracer is None:
             import potpourri3d as pp3d
 
