@@ -12,6 +12,12 @@ rule "an alternative replaces the sparse matching when its score is lower by the
 (its map at least 0.15 more within 0.05 than the sparse seed's) and breaks (0.15 less). Results
 go to ``--out`` as they come (one JSON line per pair) and a re-run resumes from them. Two
 worker processes.
+
+``--seed-basis 30 60`` also scores the seeds with short ZoomOuts of those sizes
+(``DenseConfig.seed_basis``; the seeds' maps, made with the full ZoomOut, are the same) and
+prints the table for each: which size picks the better seeds.
+
+    python benchmarks/dense_seeds.py tosca-5k ../shared/data/tosca-5k/test_pairs.txt 203 --seed-basis 30 60
 """
 
 from __future__ import annotations
@@ -24,7 +30,7 @@ from pathlib import Path
 
 from dense_variants import add_sample_arguments, prepared_pair, read_pair_lines  # the sibling script
 
-from darcyan.dense.maps import DenseConfig, chosen_seed, dense_map
+from darcyan.dense.maps import DenseConfig, chosen_seed, dense_map, seed_scores
 from darcyan.errors import DarcyanError
 from darcyan.eval.dense_scores import evaluate_dense_maps
 from darcyan.parallel import process_map
@@ -43,30 +49,38 @@ def score_pair(task: tuple) -> dict:
 
 
 def _score_pair(task: tuple) -> dict:
-    dataset, source, target, group = task
+    dataset, source, target, group, sizes, repair = task
     warnings.simplefilter("ignore")
-    shapes, correspondence, truth = prepared_pair(dataset, source, target)
+    shapes, correspondence, truth = prepared_pair(dataset, source, target, repair)
     default = dense_map(*shapes, correspondence)
     signatures = {int(rank): score for rank, score in default.check["signatures"].items()}
     matchings = [correspondence] + list(correspondence.alternatives)
     maps = {rank: dense_map(*shapes, matchings[rank], DenseConfig(candidates=1)).target for rank in signatures}
     maps["default"] = default.target
     scores = evaluate_dense_maps(shapes[0].mesh, shapes[1].mesh, maps, truth, SAMPLES, target_solver=shapes[1].solver)
+    by_size = {size: seed_scores(*shapes, correspondence, DenseConfig(seed_basis=size)) for size in sizes}
     return {"pair": f"{source}->{target}", "group": group, "default_seed": default.check["seed"],
             "trusted": default.check["trusted"], "default_rate": scores["default"].rate,
-            "seeds": [{"rank": rank, "signature": signatures[rank], "rate": scores[rank].rate} for rank in signatures]}
+            "seeds": [{"rank": rank, "signature": signatures[rank], "rate": scores[rank].rate,
+                       "by_seed_basis": {str(size): by_size[size].get(rank) for size in sizes}}
+                      for rank in signatures]}
 
 
-def pick(seeds: list, margin: float) -> dict:
-    """The rule of :func:`darcyan.dense.maps.dense_map` with ``seed_margin = margin``."""
-    return seeds[chosen_seed([s["signature"] for s in seeds], margin)]
+def pick(seeds: list, margin: float, size: int | None = None) -> dict:
+    """The rule of :func:`darcyan.dense.maps.dense_map` with ``seed_margin = margin`` (and the
+    scores of short ZoomOuts of ``size`` eigenfunctions, when given)."""
+    return seeds[chosen_seed([s["signature"] if size is None else s["by_seed_basis"][str(size)] for s in seeds],
+                             margin)]
 
 
-def summary(results: list) -> list:
+def summary(results: list, size: int | None = None) -> list:
     lines = ["| margin | picks the sparse seed | fixes | breaks | picks clearly below the best seed |",
              "| ---: | ---: | ---: | ---: | --- |"]
+    if size is not None:  # the pairs scored at that size (a journal may hold older lines)
+        results = [r for r in results if all(str(size) in s.get("by_seed_basis", {}) for s in r["seeds"])]
+        lines.insert(0, f"seed_basis {size} ({len(results)} pairs):")
     for margin in MARGINS:
-        chosen = [(r, pick(r["seeds"], margin)) for r in results if r["seeds"]]
+        chosen = [(r, pick(r["seeds"], margin, size)) for r in results if r["seeds"]]
         kept = sum(1 for r, s in chosen if s is r["seeds"][0])
         fixed = sum(1 for r, s in chosen if s["rate"] >= r["seeds"][0]["rate"] + CLEAR)
         broken = sum(1 for r, s in chosen if s["rate"] <= r["seeds"][0]["rate"] - CLEAR)
@@ -80,6 +94,10 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     add_sample_arguments(parser)
     parser.add_argument("--out", type=Path, default=Path("dense-seeds.jsonl"))
+    parser.add_argument("--seed-basis", type=int, nargs="+", default=[], metavar="N",
+                        help="also score the seeds with short ZoomOuts of these sizes")
+    parser.add_argument("--repair", action="store_true", help="prepare the meshes as --repair does (e.g. the "
+                        "decimated copies of benchmarks/robustness.py, with DARCYAN_DATA at their folder)")
     args = parser.parse_args(argv)
     try:
         pairs = read_pair_lines(args.pairs, args.dataset, args.count)
@@ -88,7 +106,7 @@ def main(argv=None) -> int:
         print(f"dense_seeds.py: error: {exc}", file=sys.stderr)
         return 2
     finished = {r["pair"] for r in done}
-    tasks = [(args.dataset, source, target, group) for source, target, group in pairs
+    tasks = [(args.dataset, source, target, group, tuple(args.seed_basis), args.repair) for source, target, group in pairs
              if f"{source}->{target}" not in finished]
     with args.out.open("a") as journal:
         for result in (process_map(score_pair, tasks, 2) if tasks else []):
@@ -99,6 +117,9 @@ def main(argv=None) -> int:
                 f"failed: {result['failed']}" if "failed" in result else
                 f"seed {result['default_seed']}, {result['default_rate']:.2f} within 0.05"), file=sys.stderr)
     print("\n".join(summary(done)))
+    for size in args.seed_basis:
+        print()
+        print("\n".join(summary(done, size)))
     return 0
 
 

@@ -38,13 +38,14 @@ REPO = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("DARCYAN_DATA", REPO.parent / "shared" / "data"))
 
 
-def prepared_pair(dataset: str, source: str, target: str) -> tuple:
+def prepared_pair(dataset: str, source: str, target: str, repair: bool = False) -> tuple:
     """``(shapes, correspondence, truth)``: both shapes described (cached), matched with the
-    defaults and prepared, and the dataset's ``.vts`` ground truth (else the identity)."""
+    defaults and prepared (``repair``: as ``--repair`` does), and the dataset's ``.vts`` ground
+    truth (else the identity)."""
     config = DarcyanConfig()
     files = [DATA / dataset / f"{source}.off", DATA / dataset / f"{target}.off"]
-    correspondence = match_shapes(*describe_shapes(files, config, cache=ShapeCache()), config)
-    shapes = [load_shape(f, config, warn=False) for f in files]
+    correspondence = match_shapes(*describe_shapes(files, config, repair=repair, cache=ShapeCache()), config)
+    shapes = [load_shape(f, config, repair=repair, warn=False) for f in files]
     vts = [DATA / dataset / "corres" / f"{name}.vts" for name in (source, target)]
     truth = GroundTruth(read_vts(vts[0]), read_vts(vts[1])) if vts[0].exists() else GroundTruth()
     return shapes, correspondence, truth

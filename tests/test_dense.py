@@ -411,6 +411,10 @@ def test_a_mirrored_seed_is_replaced_by_the_alternative_that_keeps_the_body(faus
     assert maps["seeds"].check["seed"] > 0 and maps["sparse only"].check["seed"] == 0
     assert scores["seeds"].rate >= 0.9 and scores["seeds"].mean <= 0.03
     assert maps["seeds"].check["signature"] < maps["seeds"].check["runner_up"]
+    # the scores the map chose by, without making it
+    from darcyan.dense import seed_scores
+
+    assert seed_scores(*shapes, correspondence) == maps["seeds"].check["signatures"]
     # the same choice as sparse matches: all right, where the sparse stage's were not
     from darcyan.dense import verified_matches
     from darcyan.eval.metrics import score_matches

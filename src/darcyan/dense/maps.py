@@ -738,6 +738,15 @@ def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = Den
     return chosen, _seed_check(seed, seeds, config.seed_margin)
 
 
+def seed_scores(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig()) -> dict:
+    """``{rank: score}``: the signature score of each usable seed (0: ``correspondence`` itself,
+    1, 2, ...: its alternatives), lower is better; the scores :func:`dense_map` chooses its seed
+    by (see :func:`chosen_seed`), without making the map. Raises DarcyanError like it."""
+    shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
+    _, seeds, _, _ = _choose_seed(shape_1, shape_2, correspondence, config, lambda stage: None, {})
+    return {seed.rank: seed.signature for seed in seeds}
+
+
 def _seed_check(seed, seeds: list, margin: float) -> dict:
     others = sorted(s.signature for s in seeds if s is not seed)
     return {"seed": seed.rank, "seeds": len(seeds), "signature": seed.signature,
