@@ -638,11 +638,18 @@ def test_a_matching_in_doubt_is_verified_by_default(faust, tmp_path, monkeypatch
     assert correspondence.in_doubt and correspondence.margin < config.mirror.verify_below
     never = config.replace(mirror=dataclasses.replace(config.mirror, verify_below=0.0))
     assert not match_shapes(first, second, never).in_doubt
-    for flag, correct in (([], "5 of 5"), (["--no-verify"], "1 of 5")):
-        assert main(["match", str(source), str(target), "--truth", truth, "-o", str(tmp_path / "m.csv"), *flag]) == 0
+    for flag, correct, name in (([], "5 of 5", "verified"), (["--no-verify"], "1 of 5", "unverified")):
+        assert main(["match", str(source), str(target), "--truth", truth, "-o", str(tmp_path / f"{name}.csv"),
+                     *flag]) == 0
         err = capsys.readouterr().err
         assert f"{correct} matches correct" in err
         assert ("verified (in doubt" in err) == (not flag)
+    # Again: the verification's outcome comes from the cache, no shape is prepared, the same matches.
+    monkeypatch.setattr("darcyan.method.pipeline.load_shape", lambda *a, **k: pytest.fail("a shape was prepared"))
+    assert main(["match", str(source), str(target), "-o", str(tmp_path / "again.csv")]) == 0
+    assert "verified (in doubt: the orientation test's margin 0.05 < 0.25) (cached)" in capsys.readouterr().err
+    again = (tmp_path / "again.csv").read_text()
+    assert again == (tmp_path / "verified.csv").read_text() != (tmp_path / "unverified.csv").read_text()
     with pytest.raises(SystemExit) as stop:  # argparse's usage error
         main(["match", str(source), str(target), "--verify", "--no-verify"])
     assert stop.value.code == 2 and "not allowed with" in capsys.readouterr().err
@@ -829,3 +836,45 @@ def test_farthest_seed_points_are_spread_when_zoomout_runs_on_every_vertex(figur
     sampled = DenseConfig(sampling="farthest", zoomout_samples=1000)
     first = zoomout_samples(shape, shape, sampled)[0]
     assert np.array_equal(seed_subset(shape, first, 300, sampled), first[:300])
+
+
+def test_a_verification_is_kept_per_pair_of_files_and_settings(small_pose_files, tmp_path):
+    """The outcome read back from the cache is the one computed (seed, scores, the same
+    matching); other settings or other files are verified anew."""
+    from darcyan.dense.verify import verified_file_matches
+    from darcyan.io.cache import ShapeCache
+    from darcyan.method.pipeline import describe_shapes, load_shape
+
+    config, cache = DarcyanConfig(), ShapeCache(tmp_path / "verify-cache")
+    source, target = small_pose_files
+    correspondence = match_shapes(*describe_shapes([source, target], config), config)
+    calls = []
+
+    def shapes():
+        calls.append(1)
+        return [load_shape(p, config) for p in (source, target)]
+
+    def verify(dense_config=DenseConfig(), files=(source, target)):
+        return verified_file_matches(*files, correspondence, shapes, config, dense_config, False, cache)
+
+    first, about = verify()
+    again, about_again = verify()
+    assert len(calls) == 1 and not about["cached"] and about_again["cached"]
+    assert {k: v for k, v in about_again.items() if k != "cached"} == {k: v for k, v in about.items() if k != "cached"}
+    assert np.array_equal(again.source_vertex, first.source_vertex)
+    assert np.array_equal(again.target_vertex, first.target_vertex)
+    verify(DenseConfig(seed_margin=0.1))
+    verify(files=(target, source))
+    assert len(calls) == 3
+
+
+def test_the_matching_of_a_seed_keeps_the_others_as_alternatives():
+    from darcyan.dense.maps import matching_of_seed
+
+    others = tuple(tip_correspondence([i], [i + 1]) for i in range(3))
+    sparse = dataclasses.replace(tip_correspondence([9], [9]), alternatives=others)
+    assert matching_of_seed(sparse, 0) is sparse
+    chosen = matching_of_seed(sparse, 2)
+    assert chosen.source_vertex.tolist() == [1] and chosen.alternatives == (sparse, others[0], others[2])
+    with pytest.raises(DarcyanError, match="seed 4: the matching has 3 alternatives"):
+        matching_of_seed(sparse, 4)

@@ -154,25 +154,34 @@ def cmd_match(args: argparse.Namespace) -> int:
     results = []  # (target, correspondence, dense map or None)
     for target, description in zip(targets, descriptions[1:]):
         correspondence = match_shapes(descriptions[0], description, config)
-        shapes = score = dense = None
+        score = dense = None
+        prepared: list = []  # both shapes, prepared once for everything below that needs them
+
+        def shapes_of(target=target):
+            nonlocal source_shape
+            if not prepared:
+                if source_shape is None:
+                    source_shape = load_shape(args.source, config, args.repair, warn=False)
+                prepared.extend([source_shape, load_shape(target, config, args.repair, warn=False)])
+            return prepared
+
         # A matching in doubt is verified, unless --no-verify or a dense map makes the same choice.
         verify = args.verify or (correspondence.in_doubt and not args.no_verify and not args.dense)
-        if args.dense or args.plot or args.html or args.truth or verify:  # prepared once for all of them
-            if source_shape is None:
-                source_shape = load_shape(args.source, config, args.repair, warn=False)
-            shapes = [source_shape, load_shape(target, config, args.repair, warn=False)]
         if verify:
-            from .dense.maps import DENSE_FAILURES, DenseConfig, verified_matches
+            from .dense.maps import DENSE_FAILURES, DenseConfig
+            from .dense.verify import verified_file_matches
 
             why = "" if args.verify else (f" (in doubt: the orientation test's margin {correspondence.margin:.2f} "
                                           f"< {config.mirror.verify_below:g})")
             say(f"verifying the matches{why}")
             try:
-                correspondence, about = verified_matches(shapes[0], shapes[1], correspondence,
-                                                         dense_config or DenseConfig())
-                print(f"darcyan: {target}: verified{why}: {_seed_verdict(about)}", file=sys.stderr)
+                correspondence, about = verified_file_matches(args.source, target, correspondence, shapes_of, config,
+                                                              dense_config or DenseConfig(), args.repair, cache)
+                print(f"darcyan: {target}: verified{why}{' (cached)' if about['cached'] else ''}: "
+                      f"{_seed_verdict(about)}", file=sys.stderr)
             except DENSE_FAILURES as exc:
                 print(f"darcyan: warning: {target}: the matches were not verified: {exc}", file=sys.stderr)
+        shapes = shapes_of() if args.dense or args.plot or args.html or args.truth else None
         if args.truth:
             truth = read_truth(args.truth, descriptions[0].n_input_vertices, description.n_input_vertices)
             score = score_matches(shapes[0], shapes[1], correspondence, truth)

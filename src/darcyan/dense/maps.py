@@ -731,11 +731,19 @@ def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = Den
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
     seed, seeds, _, _ = _choose_seed(shape_1, shape_2, correspondence, config, lambda stage: None, {})
+    return matching_of_seed(correspondence, seed.rank), _seed_check(seed, seeds, config.seed_margin)
+
+
+def matching_of_seed(correspondence, rank: int):
+    """The matching of seed ``rank`` (0: ``correspondence`` itself; 1, 2, ...: its
+    ``alternatives``), the others (the sparse matching first) as its alternatives."""
     matchings = [correspondence] + list(getattr(correspondence, "alternatives", ()))
-    chosen = matchings[seed.rank]
-    if seed.rank > 0:
+    if not 0 <= rank < len(matchings):
+        raise DarcyanError(f"seed {rank}: the matching has {len(matchings) - 1} alternatives")
+    chosen = matchings[rank]
+    if rank > 0:
         chosen = dataclasses.replace(chosen, alternatives=tuple(m for m in matchings if m is not chosen))
-    return chosen, _seed_check(seed, seeds, config.seed_margin)
+    return chosen
 
 
 def seed_scores(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig()) -> dict:

@@ -1,0 +1,63 @@
+"""Verifying a matching in doubt, once per pair of files: :func:`verified_file_matches`.
+
+The verification (:func:`darcyan.dense.maps.verified_matches`) prepares both shapes and runs a
+short ZoomOut per candidate matching: seconds on large meshes, against a tenth of a second for a
+match from cached descriptions. Its outcome (which seed, the seeds' scores) depends only on the
+two files' contents, the settings and darcyan's code, so it is kept in the shape cache under a
+key of those, and a second match of the same pair reads it instead of preparing the shapes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+from typing import Callable
+
+import numpy as np
+
+from ..config import DarcyanConfig
+from ..io.cache import ShapeCache, code_digest, file_digest
+from .maps import DenseConfig, matching_of_seed, verified_matches
+
+
+def verified_file_matches(source: str | os.PathLike, target: str | os.PathLike, correspondence,
+                          shapes: Callable[[], tuple], config: DarcyanConfig = DarcyanConfig(),
+                          dense_config: DenseConfig = DenseConfig(), repair: bool = False,
+                          cache: ShapeCache | None = None) -> tuple:
+    """:func:`~darcyan.dense.maps.verified_matches` of the files ``source`` and ``target``,
+    whose ``correspondence`` was matched with ``config`` (and ``repair``); ``shapes()`` gives
+    their two prepared shapes, called only when the outcome is not in ``cache``.
+
+    Returns ``(matches, about)`` as ``verified_matches`` does; ``about["cached"]`` says whether
+    the outcome was read from the cache.
+    """
+    key = None
+    if cache is not None:
+        settings = json.dumps(dataclasses.asdict(dense_config), sort_keys=True, default=str)
+        key = cache.key("verify", f"code={code_digest()}", file_digest(source), file_digest(target),
+                        config.fingerprint(), settings, f"repair={repair}")
+        stored = cache.load(key)
+        if stored is not None and {"seed", "seeds", "ranks", "scores", "clear"} <= stored.keys():
+            about = _about_from_arrays(stored)
+            return matching_of_seed(correspondence, about["seed"]), {**about, "cached": True}
+    matches, about = verified_matches(*shapes(), correspondence, dense_config)
+    if key is not None:
+        cache.save(key, _about_arrays(about))
+    return matches, {**about, "cached": False}
+
+
+def _about_arrays(about: dict) -> dict:
+    ranks = sorted(about["signatures"])
+    return {"seed": np.array(about["seed"]), "seeds": np.array(about["seeds"]),
+            "ranks": np.array(ranks, dtype=np.int64),
+            "scores": np.array([about["signatures"][r] for r in ranks], dtype=np.float64),
+            "clear": np.array(bool(about["clear"]))}
+
+
+def _about_from_arrays(stored: dict) -> dict:
+    seed = int(stored["seed"])
+    signatures = {int(r): float(v) for r, v in zip(stored["ranks"], stored["scores"])}
+    others = sorted(v for r, v in signatures.items() if r != seed)
+    return {"seed": seed, "seeds": int(stored["seeds"]), "signature": signatures.get(seed, 0.0),
+            "runner_up": others[0] if others else None, "signatures": signatures, "clear": bool(stored["clear"])}
