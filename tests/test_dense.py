@@ -421,6 +421,10 @@ def test_a_mirrored_seed_is_replaced_by_the_alternative_that_keeps_the_body(faus
 
     verified, about = verified_matches(*shapes, correspondence)
     assert about["seed"] == maps["seeds"].check["seed"]
+    # scored on a spectrum of the short ZoomOuts' size: the same scores within a percent
+    assert about["signatures"].keys() == maps["seeds"].check["signatures"].keys()
+    for rank, score in maps["seeds"].check["signatures"].items():
+        assert about["signatures"][rank] == pytest.approx(score, rel=0.01)
     before, after = score_matches(*shapes, correspondence, truth), score_matches(*shapes, verified, truth)
     assert before.correct < len(correspondence) and after.correct == len(verified) >= 5
     assert any(m is correspondence for m in verified.alternatives)  # the sparse matching stays an alternative
