@@ -102,6 +102,9 @@ def main(argv=None) -> int:
     try:
         pairs = read_pair_lines(args.pairs, args.dataset, args.count)
         done = [json.loads(line) for line in args.out.read_text().splitlines()] if args.out.exists() else []
+        options = {"dataset": args.dataset, "repair": args.repair}
+        if any(r.get("options", options) != options for r in done):  # a resumed journal of another run
+            raise DarcyanError(f"{args.out}: made with other options than {options}; give another --out")
     except (OSError, ValueError, DarcyanError) as exc:  # one line, no traceback (OSError names its file)
         print(f"dense_seeds.py: error: {exc}", file=sys.stderr)
         return 2
@@ -110,7 +113,7 @@ def main(argv=None) -> int:
              if f"{source}->{target}" not in finished]
     with args.out.open("a") as journal:
         for result in (process_map(score_pair, tasks, 2) if tasks else []):
-            journal.write(json.dumps(result) + "\n")
+            journal.write(json.dumps({**result, "options": options}) + "\n")
             journal.flush()
             done.append(result)
             print(f"{len(done)}/{len(pairs)} {result['pair']}: " + (

@@ -842,34 +842,51 @@ def test_farthest_seed_points_are_spread_when_zoomout_runs_on_every_vertex(figur
     assert np.array_equal(seed_subset(shape, first, 300, sampled), first[:300])
 
 
-def test_a_verification_is_kept_per_pair_of_files_and_settings(small_pose_files, tmp_path):
-    """The outcome read back from the cache is the one computed (seed, scores, the same
-    matching); other settings or other files are verified anew."""
-    from darcyan.dense.verify import verified_file_matches
+def test_a_verification_is_kept_per_pair_of_files_and_settings(small_pose_files, tmp_path, monkeypatch):
+    """The outcome read back from the cache is the one computed (seed, scores, the matching of
+    that seed); other files, preparation, matchings or dense settings are verified anew."""
+    import darcyan.dense.verify as verify_module
+    from darcyan.dense.maps import matching_of_seed
     from darcyan.io.cache import ShapeCache
     from darcyan.method.pipeline import describe_shapes, load_shape
 
+    class Miss(Exception):
+        pass
+
     config, cache = DarcyanConfig(), ShapeCache(tmp_path / "verify-cache")
     source, target = small_pose_files
-    correspondence = match_shapes(*describe_shapes([source, target], config), config)
-    calls = []
+    matched = match_shapes(*describe_shapes([source, target], config), config)
+    others = (tip_correspondence([1, 2, 3], [1, 2, 3]), tip_correspondence([4, 5, 6], [4, 5, 6]))
+    correspondence = dataclasses.replace(matched, alternatives=others)
 
-    def shapes():
-        calls.append(1)
-        return [load_shape(p, config) for p in (source, target)]
+    def verify(shapes, matching=correspondence, dense_config=DenseConfig(), files=(source, target), **changes):
+        return verify_module.verified_file_matches(*files, matching, shapes, changes.get("config", config),
+                                                   dense_config, changes.get("repair", False), cache)
 
-    def verify(dense_config=DenseConfig(), files=(source, target)):
-        return verified_file_matches(*files, correspondence, shapes, config, dense_config, False, cache)
+    def refuse():
+        raise Miss
 
-    first, about = verify()
-    again, about_again = verify()
-    assert len(calls) == 1 and not about["cached"] and about_again["cached"]
-    assert {k: v for k, v in about_again.items() if k != "cached"} == {k: v for k, v in about.items() if k != "cached"}
-    assert np.array_equal(again.source_vertex, first.source_vertex)
-    assert np.array_equal(again.target_vertex, first.target_vertex)
-    verify(DenseConfig(seed_margin=0.1))
-    verify(files=(target, source))
-    assert len(calls) == 3
+    # computed once (a stand-in outcome choosing alternative 2), then read back without the shapes
+    about = {"seed": 2, "seeds": 3, "signature": 0.5, "runner_up": 0.75, "signatures": {0: 0.75, 1: 0.8, 2: 0.5},
+             "clear": True}
+    monkeypatch.setattr(verify_module, "verified_matches",
+                        lambda s1, s2, c, d: (matching_of_seed(c, 2), dict(about)))
+    first, computed = verify(lambda: (None, None))
+    monkeypatch.undo()
+    again, cached = verify(refuse)
+    assert not computed["cached"] and cached["cached"]
+    assert {k: v for k, v in cached.items() if k != "cached"} == about
+    assert again.source_vertex.tolist() == first.source_vertex.tolist() == [4, 5, 6]
+    assert again.alternatives[0] is correspondence  # the sparse matching first among the others
+    for changed in ({"dense_config": DenseConfig(seed_margin=0.1)}, {"files": (target, source)},
+                    {"repair": True}, {"matching": matched},
+                    {"config": config.replace(denoise_area_ratio=config.denoise_area_ratio + 0.1)}):
+        with pytest.raises(Miss):
+            verify(refuse, **changed)
+    # a real verification of the figure pair is kept too
+    shapes = [load_shape(p, config) for p in (source, target)]
+    real, real_about = verify(lambda: shapes, matching=matched)
+    assert verify(refuse, matching=matched)[1]["seed"] == real_about["seed"]
 
 
 def test_the_matching_of_a_seed_keeps_the_others_as_alternatives():

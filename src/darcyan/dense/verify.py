@@ -3,13 +3,16 @@
 The verification (:func:`darcyan.dense.maps.verified_matches`) prepares both shapes and runs a
 short ZoomOut per candidate matching: seconds on large meshes, against a tenth of a second for a
 match from cached descriptions. Its outcome (which seed, the seeds' scores) depends only on the
-two files' contents, the settings and darcyan's code, so it is kept in the shape cache under a
-key of those, and a second match of the same pair reads it instead of preparing the shapes.
+two files' contents, how they are prepared, the matchings weighed, the dense settings and
+darcyan's code, so it is kept in the shape cache under a key of those, and a second match of the
+same pair reads it instead of preparing the shapes. A verification that fails (too few
+consistent landmarks) is not kept.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import os
 from typing import Callable
@@ -36,10 +39,10 @@ def verified_file_matches(source: str | os.PathLike, target: str | os.PathLike, 
     if cache is not None:
         settings = json.dumps(dataclasses.asdict(dense_config), sort_keys=True, default=str)
         key = cache.key("verify", f"code={code_digest()}", file_digest(source), file_digest(target),
-                        config.fingerprint(), settings, f"repair={repair}")
-        stored = cache.load(key)
-        if stored is not None and {"seed", "seeds", "ranks", "scores", "clear"} <= stored.keys():
-            about = _about_from_arrays(stored)
+                        config.prepare_fingerprint(), f"repair={repair}", settings,
+                        _matchings_digest(correspondence, dense_config.candidates))
+        about = _about_from_arrays(cache.load(key), correspondence)
+        if about is not None:
             return matching_of_seed(correspondence, about["seed"]), {**about, "cached": True}
     matches, about = verified_matches(*shapes(), correspondence, dense_config)
     if key is not None:
@@ -55,9 +58,29 @@ def _about_arrays(about: dict) -> dict:
             "clear": np.array(bool(about["clear"]))}
 
 
-def _about_from_arrays(stored: dict) -> dict:
+def _matchings_digest(correspondence, candidates: int) -> str:
+    """What the verification weighs: the matching and the alternatives it looks at (their
+    vertex pairs and descriptor distances, which break ties between landmark sets), so that
+    another matching of the same files (other settings) is verified anew."""
+    matchings = [correspondence] + list(getattr(correspondence, "alternatives", ()))[:max(candidates - 1, 0)]
+    h = hashlib.sha1()
+    for matching in matchings:
+        for values, kind in ((matching.source_vertex, np.int64), (matching.target_vertex, np.int64),
+                             (matching.distance, np.float64)):
+            h.update(np.asarray(values, dtype=kind).tobytes() + b"|")
+    return h.hexdigest()
+
+
+def _about_from_arrays(stored: dict | None, correspondence) -> dict | None:
+    """The outcome kept in a cache entry; ``None`` when there is none or it does not fit
+    ``correspondence`` (then the pair is verified anew)."""
+    if stored is None or not {"seed", "seeds", "ranks", "scores", "clear"} <= stored.keys():
+        return None
     seed = int(stored["seed"])
+    usable = 1 + len(getattr(correspondence, "alternatives", ()))
+    if seed not in stored["ranks"].tolist() or len(stored["ranks"]) != int(stored["seeds"]) or seed >= usable:
+        return None
     signatures = {int(r): float(v) for r, v in zip(stored["ranks"], stored["scores"])}
     others = sorted(v for r, v in signatures.items() if r != seed)
-    return {"seed": seed, "seeds": int(stored["seeds"]), "signature": signatures.get(seed, 0.0),
+    return {"seed": seed, "seeds": int(stored["seeds"]), "signature": signatures[seed],
             "runner_up": others[0] if others else None, "signatures": signatures, "clear": bool(stored["clear"])}
