@@ -368,7 +368,7 @@ def _installed(module: str) -> bool:
 
 
 @pytest.mark.slow
-def test_bench_verifies_the_matchings_in_doubt(capsys, tmp_path, figures):
+def test_bench_verifies_the_matchings_in_doubt(capsys, tmp_path, figures, monkeypatch, private_cache):
     """Every darcyan record carries the orientation test's margin; with every matching in doubt
     (verify_below 100) each is verified, as `darcyan match` would, and says so; with 0, none."""
     pairs = tmp_path / "pairs.txt"
@@ -387,3 +387,20 @@ def test_bench_verifies_the_matchings_in_doubt(capsys, tmp_path, figures):
         assert any(r["margin"] is not None for r in records)  # some matching had a runner-up to doubt
         count = sum("verified" in r for r in records)
         assert f"verified by short dense maps: {count} pairs" in (out / "report.md").read_text()
+        if verified:
+            first = {(r["source"], r["target"]): r.get("verified") for r in records}
+    # Again, into another folder: the verifications come from the cache (as `darcyan match`'s do).
+    import darcyan.dense.maps
+    import darcyan.dense.verify
+
+    def recompute(*args, **kwargs):
+        raise AssertionError("verified again")
+
+    for module in (darcyan.dense.maps, darcyan.dense.verify):
+        monkeypatch.setattr(module, "verified_matches", recompute)
+    settings = tmp_path / "verify100.json"
+    code, _, err = run(capsys, "bench", figures, "--pairs", pairs, "--config", settings, "--out", tmp_path / "again", "-q")
+    assert code == 0, err
+    records = [json.loads(line) for line in (tmp_path / "again" / "pairs.jsonl").read_text().splitlines()]
+    assert {(r["source"], r["target"]): r.get("verified") for r in records} == first
+    assert not any("verify_failed" in r for r in records)

@@ -516,15 +516,21 @@ def _sparse_records(job: dict, target: Shape) -> list:
 
 
 def _verified(job: dict, target: Shape, correspondence) -> tuple:
-    """A matching in doubt verified by short dense maps (:func:`darcyan.dense.verified_matches`):
-    the matching and what the record says of it (``verified``: the seed's rank, 0 for the sparse
-    matching; ``verify_failed`` when it could not be verified, the matching kept)."""
-    from ..dense.maps import DENSE_FAILURES, DenseConfig, verified_matches
+    """A matching in doubt verified by short dense maps, as ``darcyan match`` does
+    (:func:`darcyan.dense.verify.verified_file_matches`: kept in the run's cache): the matching
+    and what the record says of it (``verified``: the seed's rank, 0 for the sparse matching;
+    ``verify_failed`` when it could not be verified, the matching kept)."""
+    from ..dense.maps import DENSE_FAILURES, DenseConfig
+    from ..dense.verify import verified_file_matches
 
     settings: BenchSettings = job["settings"]
-    source = prepared_shape(job["source_path"], settings.repair, settings.config)
+
+    def shapes():
+        return prepared_shape(job["source_path"], settings.repair, settings.config), target
+
     try:
-        chosen, about = verified_matches(source, target, correspondence, DenseConfig())
+        chosen, about = verified_file_matches(job["source_path"], job["target_path"], correspondence, shapes,
+                                              settings.config, DenseConfig(), settings.repair, _cache_of(job))
     except DENSE_FAILURES as exc:
         return correspondence, {"verify_failed": str(exc) if isinstance(exc, DarcyanError)
                                 else f"{type(exc).__name__}: {exc}"}
