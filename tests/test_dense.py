@@ -266,6 +266,44 @@ def _disc_shape():
     return prepare_shape(synthetic.flat_disc(radius=1.0, rings=30))
 
 
+def test_orientation_coordinates_are_the_area_weighted_sines_of_numpys_cross_products(figure_poses):
+    """The same bits as the definition written with numpy.cross (the function spells the cross
+    product out for speed), with the shape's kept face frame or without one."""
+    import types
+
+    from darcyan.dense.maps import orientation_coordinates
+    from darcyan.geometry.operators import face_gradients
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(figure_poses[0])
+    rng = np.random.default_rng(3)
+    fields = np.stack([shape.solver.distance(v) for v in rng.choice(shape.n_vertices, 4, replace=False)], axis=1)
+    others = rng.normal(size=(shape.n_vertices, 2)).cumsum(axis=0)
+    v, f = shape.mesh.vertices, shape.mesh.faces
+    normal = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    area = np.linalg.norm(normal, axis=1)
+    unit = normal / area[:, None]
+    for extra in (None, others):
+        both = fields if extra is None else np.hstack([fields, extra])
+        a, b = np.triu_indices(4, k=1) if extra is None else (np.repeat(np.arange(4), 2), 4 + np.tile(np.arange(2), 4))
+        grads = face_gradients(shape.mesh, both)
+        norm = np.linalg.norm(grads, axis=1)
+        sine = (np.einsum("mi,mip->mp", unit, np.cross(grads[:, :, a], grads[:, :, b], axis=1))
+                / np.maximum(norm[:, a] * norm[:, b], 1e-12))
+        expected = np.zeros((shape.n_vertices, sine.shape[1]))
+        weight = np.zeros(shape.n_vertices)
+        for corner in range(3):
+            np.add.at(expected, f[:, corner], area[:, None] * sine)
+            np.add.at(weight, f[:, corner], area)
+        expected /= weight[:, None]
+        for holder in (shape, types.SimpleNamespace(mesh=shape.mesh)):
+            got = orientation_coordinates(holder, fields, extra)
+            assert got.shape == expected.shape
+            np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-15)
+        assert np.array_equal(orientation_coordinates(shape, fields, extra),
+                              orientation_coordinates(types.SimpleNamespace(mesh=shape.mesh), fields, extra))
+
+
 def test_orientation_coordinates_on_a_plane_are_the_sine_between_the_landmark_directions():
     # On a plane the distance to a point grows along the direction away from it, so the turn from
     # landmark a's gradient to landmark b's about the normal is sin of the angle between x - a and

@@ -456,20 +456,41 @@ def orientation_coordinates(shape, fields: np.ndarray, others: np.ndarray | None
         a, b = np.repeat(np.arange(k), others.shape[1]), k + np.tile(np.arange(others.shape[1]), k)
         fields = np.hstack([fields, others])
     grads = face_gradients(mesh, fields, getattr(shape, "gradient", None))  # (m, 3, k [+ j])
-    v, f = mesh.vertices, mesh.faces
-    normal = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-    area = np.linalg.norm(normal, axis=1)
-    unit = normal / np.maximum(area, 1e-300)[:, None]
+    unit, corners, weight = _face_frame(shape)
     norm = np.linalg.norm(grads, axis=1)  # (m, k)
-    cross = np.cross(grads[:, :, a], grads[:, :, b], axis=1)  # (m, 3, pairs)
+    ga, gb = [grads[:, i, a] for i in range(3)], [grads[:, i, b] for i in range(3)]  # (m, pairs) each
+    # The cross product of each pair, with numpy.cross's operations in its order (the same bits,
+    # without its copies of the (m, 3, pairs) operands: 40% of this function's time at 52k).
+    c0 = ga[1] * gb[2]
+    c0 -= ga[2] * gb[1]
+    c1 = ga[2] * gb[0]
+    c1 -= ga[0] * gb[2]
+    c2 = ga[0] * gb[1]
+    c2 -= ga[1] * gb[0]
+    cross = np.stack([c0, c1, c2], axis=1)  # (m, 3, pairs)
     sine = np.einsum("mi,mip->mp", unit, cross) / np.maximum(norm[:, a] * norm[:, b], 1e-12)
-    import scipy.sparse as sp
-
-    # (n, m) face areas at the faces' corners: one product sums them per vertex.
-    corners = sp.csr_matrix((np.repeat(area, 3), (f.ravel(), np.repeat(np.arange(len(f)), 3))),
-                            shape=(mesh.n_vertices, len(f)))
-    weight = np.asarray(corners.sum(axis=1)).ravel()
     return (corners @ sine) / np.maximum(weight, 1e-300)[:, None]
+
+
+def _face_frame(shape) -> tuple:
+    """``(unit normals (m, 3), corners (n, m), weight (n,))`` of the shape's faces: the (n, m)
+    matrix of face areas at the faces' corners (one product sums a face field per vertex) and
+    its row sums; once per shape (:meth:`Shape.derived`) when the shape keeps derived results."""
+
+    def compute():
+        import scipy.sparse as sp
+
+        mesh = shape.mesh
+        v, f = mesh.vertices, mesh.faces
+        normal = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+        area = np.linalg.norm(normal, axis=1)
+        unit = normal / np.maximum(area, 1e-300)[:, None]
+        corners = sp.csr_matrix((np.repeat(area, 3), (f.ravel(), np.repeat(np.arange(len(f)), 3))),
+                                shape=(mesh.n_vertices, len(f)))
+        return unit, corners, np.asarray(corners.sum(axis=1)).ravel()
+
+    derived = getattr(shape, "derived", None)
+    return compute() if derived is None else derived(("face frame",), compute)
 
 
 class _Fitter:
