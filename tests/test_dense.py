@@ -463,6 +463,9 @@ def test_a_mirrored_seed_is_replaced_by_the_alternative_that_keeps_the_body(faus
     assert about["signatures"].keys() == maps["seeds"].check["signatures"].keys()
     for rank, score in maps["seeds"].check["signatures"].items():
         assert about["signatures"][rank] == pytest.approx(score, rel=0.01)
+    # on the dense map's own basis (before a dense map): its scores exactly
+    on_full_basis = verified_matches(*shapes, correspondence, full_basis=True)[1]
+    assert on_full_basis["signatures"] == maps["seeds"].check["signatures"]
     before, after = score_matches(*shapes, correspondence, truth), score_matches(*shapes, verified, truth)
     assert before.correct < len(correspondence) and after.correct == len(verified) >= 5
     assert any(m is correspondence for m in verified.alternatives)  # the sparse matching stays an alternative
@@ -899,7 +902,8 @@ def test_a_verification_is_kept_per_pair_of_files_and_settings(small_pose_files,
 
     def verify(shapes, matching=correspondence, dense_config=DenseConfig(), files=(source, target), **changes):
         return verify_module.verified_file_matches(*files, matching, shapes, changes.get("config", config),
-                                                   dense_config, changes.get("repair", False), cache)
+                                                   dense_config, changes.get("repair", False), cache,
+                                                   full_basis=changes.get("full_basis", False))
 
     def refuse():
         raise Miss
@@ -908,7 +912,7 @@ def test_a_verification_is_kept_per_pair_of_files_and_settings(small_pose_files,
     about = {"seed": 2, "seeds": 3, "signature": 0.5, "runner_up": 0.75, "signatures": {0: 0.75, 1: 0.8, 2: 0.5},
              "clear": True}
     monkeypatch.setattr(verify_module, "verified_matches",
-                        lambda s1, s2, c, d: (matching_of_seed(c, 2), dict(about)))
+                        lambda s1, s2, c, d, full: (matching_of_seed(c, 2), dict(about)))
     first, computed = verify(lambda: (None, None))
     monkeypatch.undo()
     again, cached = verify(refuse)
@@ -917,7 +921,7 @@ def test_a_verification_is_kept_per_pair_of_files_and_settings(small_pose_files,
     assert again.source_vertex.tolist() == first.source_vertex.tolist() == [4, 5, 6]
     assert again.alternatives[0] is correspondence  # the sparse matching first among the others
     for changed in ({"dense_config": DenseConfig(seed_margin=0.1)}, {"files": (target, source)},
-                    {"repair": True}, {"matching": matched},
+                    {"repair": True}, {"matching": matched}, {"full_basis": True},
                     {"config": config.replace(denoise_area_ratio=config.denoise_area_ratio + 0.1)}):
         with pytest.raises(Miss):
             verify(refuse, **changed)

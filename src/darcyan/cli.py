@@ -175,8 +175,10 @@ def cmd_match(args: argparse.Namespace) -> int:
                                           f"< {config.mirror.verify_below:g})")
             say(f"verifying the matches{why}")
             try:
+                # With --dense, scored on the dense map's basis, which the map then reuses.
                 correspondence, about = verified_file_matches(args.source, target, correspondence, shapes_of, config,
-                                                              dense_config or DenseConfig(), args.repair, cache)
+                                                              dense_config or DenseConfig(), args.repair, cache,
+                                                              full_basis=bool(args.dense))
                 print(f"darcyan: {target}: verified{why}{' (cached)' if about['cached'] else ''}: "
                       f"{_seed_verdict(about)}", file=sys.stderr)
             except DENSE_FAILURES as exc:

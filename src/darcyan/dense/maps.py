@@ -736,7 +736,8 @@ def input_map(shape_1, shape_2, local: np.ndarray) -> np.ndarray:
     return target
 
 
-def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig()):
+def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig(),
+                     full_basis: bool = False):
     """The matching a dense map would be seeded by: ``correspondence`` itself, or the alternative
     (``correspondence.alternatives``) whose short ZoomOut map keeps the curvature signature
     clearly better (see :class:`DenseConfig`: ``candidates``, ``seed_margin``). Scored on a
@@ -744,6 +745,8 @@ def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = Den
     scores on its full basis: the same seed on every pair compared (``docs/parameters.md``), not
     by construction. Costs the two shapes' 30 first eigenfunctions and a short ZoomOut per
     candidate (choosing the seed of a 5k pair: 0.45 s, against 1.34 s on the full basis).
+    ``full_basis``: score on the dense map's full basis instead, exactly as :func:`dense_map`
+    does (when a dense map follows, which then reuses that basis).
 
     Returns ``(matches, about)``: a correspondence of the same kind as ``correspondence`` (its
     ``alternatives`` the others, the sparse matching first among them), and what
@@ -754,8 +757,8 @@ def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = Den
         DarcyanError: when no candidate has :data:`MIN_LANDMARKS` consistent matches.
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
-    seed, seeds, _, _ = _choose_seed(shape_1, shape_2, correspondence, seed_scoring_config(config),
-                                     lambda stage: None, {})
+    scoring = config if full_basis else seed_scoring_config(config)
+    seed, seeds, _, _ = _choose_seed(shape_1, shape_2, correspondence, scoring, lambda stage: None, {})
     return matching_of_seed(correspondence, seed.rank), _seed_check(seed, seeds, config.seed_margin)
 
 

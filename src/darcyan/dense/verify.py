@@ -27,10 +27,11 @@ from .maps import DenseConfig, matching_of_seed, verified_matches
 def verified_file_matches(source: str | os.PathLike, target: str | os.PathLike, correspondence,
                           shapes: Callable[[], tuple], config: DarcyanConfig = DarcyanConfig(),
                           dense_config: DenseConfig = DenseConfig(), repair: bool = False,
-                          cache: ShapeCache | None = None) -> tuple:
+                          cache: ShapeCache | None = None, full_basis: bool = False) -> tuple:
     """:func:`~darcyan.dense.maps.verified_matches` of the files ``source`` and ``target``,
     whose ``correspondence`` was matched with ``config`` (and ``repair``); ``shapes()`` gives
-    their two prepared shapes, called only when the outcome is not in ``cache``.
+    their two prepared shapes, called only when the outcome is not in ``cache``; ``full_basis``
+    as ``verified_matches`` takes it.
 
     Returns ``(matches, about)`` as ``verified_matches`` does; ``about["cached"]`` says whether
     the outcome was read from the cache.
@@ -39,12 +40,12 @@ def verified_file_matches(source: str | os.PathLike, target: str | os.PathLike, 
     if cache is not None:
         settings = json.dumps(dataclasses.asdict(dense_config), sort_keys=True, default=str)
         key = cache.key("verify", f"code={code_digest()}", file_digest(source), file_digest(target),
-                        config.prepare_fingerprint(), f"repair={repair}", settings,
+                        config.prepare_fingerprint(), f"repair={repair}", f"full_basis={full_basis}", settings,
                         _matchings_digest(correspondence, dense_config.candidates))
         about = _about_from_arrays(cache.load(key), correspondence)
         if about is not None:
             return matching_of_seed(correspondence, about["seed"]), {**about, "cached": True}
-    matches, about = verified_matches(*shapes(), correspondence, dense_config)
+    matches, about = verified_matches(*shapes(), correspondence, dense_config, full_basis)
     if key is not None:
         cache.save(key, _about_arrays(about))
     return matches, {**about, "cached": False}
