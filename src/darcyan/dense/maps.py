@@ -790,16 +790,21 @@ def seed_scores(shape_1, shape_2, correspondence, config: DenseConfig = DenseCon
     """``{rank: score}``: the signature score of each usable seed (0: ``correspondence`` itself,
     1, 2, ...: its alternatives), lower is better; the scores :func:`dense_map` chooses its seed
     by (see :func:`chosen_seed`), without making the map. Raises DarcyanError like it."""
-    shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
-    _, seeds, _, _ = _choose_seed(shape_1, shape_2, correspondence, config, lambda stage: None, {})
-    return {seed.rank: seed.signature for seed in seeds}
+    return verified_matches(shape_1, shape_2, correspondence, config, full_basis=True)[1]["signatures"]
+
+
+def seed_check(rank: int, signatures: dict, margin: float) -> dict:
+    """What :attr:`DenseMap.check` says of the seeds, from the chosen seed's ``rank`` and every
+    usable seed's score (``signatures``: rank -> score): ``clear`` when no other seed scores
+    within ``margin`` (relative) of it."""
+    others = sorted(score for r, score in signatures.items() if r != rank)
+    return {"seed": rank, "seeds": len(signatures), "signature": signatures[rank],
+            "runner_up": others[0] if others else None, "signatures": dict(signatures),
+            "clear": bool(not others or signatures[rank] <= (1.0 - margin) * others[0])}
 
 
 def _seed_check(seed, seeds: list, margin: float) -> dict:
-    others = sorted(s.signature for s in seeds if s is not seed)
-    return {"seed": seed.rank, "seeds": len(seeds), "signature": seed.signature,
-            "runner_up": others[0] if others else None, "signatures": {s.rank: s.signature for s in seeds},
-            "clear": bool(not others or seed.signature <= (1.0 - margin) * others[0])}
+    return seed_check(seed.rank, {s.rank: s.signature for s in seeds}, margin)
 
 
 def _choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, timings: dict) -> tuple:

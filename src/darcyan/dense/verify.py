@@ -21,7 +21,7 @@ import numpy as np
 
 from ..config import DarcyanConfig
 from ..io.cache import ShapeCache, code_digest, file_digest
-from .maps import DenseConfig, matching_of_seed, verified_matches
+from .maps import DenseConfig, matching_of_seed, seed_check, verified_matches
 
 
 def verified_file_matches(source: str | os.PathLike, target: str | os.PathLike, correspondence,
@@ -42,7 +42,7 @@ def verified_file_matches(source: str | os.PathLike, target: str | os.PathLike, 
         key = cache.key("verify", f"code={code_digest()}", file_digest(source), file_digest(target),
                         config.prepare_fingerprint(), f"repair={repair}", f"full_basis={full_basis}", settings,
                         _matchings_digest(correspondence, dense_config.candidates))
-        about = _about_from_arrays(cache.load(key), correspondence)
+        about = _about_from_arrays(cache.load(key), correspondence, dense_config.seed_margin)
         if about is not None:
             return matching_of_seed(correspondence, about["seed"]), {**about, "cached": True}
     matches, about = verified_matches(*shapes(), correspondence, dense_config, full_basis)
@@ -52,11 +52,10 @@ def verified_file_matches(source: str | os.PathLike, target: str | os.PathLike, 
 
 
 def _about_arrays(about: dict) -> dict:
+    """What a cache entry keeps: the chosen seed and every seed's score (the rest follows)."""
     ranks = sorted(about["signatures"])
-    return {"seed": np.array(about["seed"]), "seeds": np.array(about["seeds"]),
-            "ranks": np.array(ranks, dtype=np.int64),
-            "scores": np.array([about["signatures"][r] for r in ranks], dtype=np.float64),
-            "clear": np.array(bool(about["clear"]))}
+    return {"seed": np.array(about["seed"]), "ranks": np.array(ranks, dtype=np.int64),
+            "scores": np.array([about["signatures"][r] for r in ranks], dtype=np.float64)}
 
 
 def _matchings_digest(correspondence, candidates: int) -> str:
@@ -72,16 +71,13 @@ def _matchings_digest(correspondence, candidates: int) -> str:
     return h.hexdigest()
 
 
-def _about_from_arrays(stored: dict | None, correspondence) -> dict | None:
-    """The outcome kept in a cache entry; ``None`` when there is none or it does not fit
-    ``correspondence`` (then the pair is verified anew)."""
-    if stored is None or not {"seed", "seeds", "ranks", "scores", "clear"} <= stored.keys():
+def _about_from_arrays(stored: dict | None, correspondence, margin: float) -> dict | None:
+    """The outcome kept in a cache entry (:func:`~darcyan.dense.maps.seed_check` of it);
+    ``None`` when there is none or it does not fit ``correspondence`` (then the pair is verified
+    anew)."""
+    if stored is None or not {"seed", "ranks", "scores"} <= stored.keys():
         return None
-    seed = int(stored["seed"])
-    usable = 1 + len(getattr(correspondence, "alternatives", ()))
-    if seed not in stored["ranks"].tolist() or len(stored["ranks"]) != int(stored["seeds"]) or seed >= usable:
+    seed, ranks = int(stored["seed"]), stored["ranks"].tolist()
+    if seed not in ranks or seed > len(getattr(correspondence, "alternatives", ())):
         return None
-    signatures = {int(r): float(v) for r, v in zip(stored["ranks"], stored["scores"])}
-    others = sorted(v for r, v in signatures.items() if r != seed)
-    return {"seed": seed, "seeds": int(stored["seeds"]), "signature": signatures[seed],
-            "runner_up": others[0] if others else None, "signatures": signatures, "clear": bool(stored["clear"])}
+    return seed_check(seed, dict(zip(ranks, stored["scores"].tolist())), margin)
