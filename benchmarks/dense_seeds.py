@@ -100,6 +100,8 @@ def main(argv=None) -> int:
                         "decimated copies of benchmarks/robustness.py, with DARCYAN_DATA at their folder)")
     args = parser.parse_args(argv)
     try:
+        for size in args.seed_basis:  # a bad size fails here, before any work, not in every pair
+            DenseConfig(seed_basis=size)
         pairs = read_pair_lines(args.pairs, args.dataset, args.count)
         done = [json.loads(line) for line in args.out.read_text().splitlines()] if args.out.exists() else []
         options = {"dataset": args.dataset, "repair": args.repair}
