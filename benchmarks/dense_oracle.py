@@ -19,6 +19,11 @@ For each of N pairs drawn (seed 0) from PAIRS (``source<TAB>target[<TAB>group]``
   better: it bounds what ZoomOut could reach with this basis (and the ground truth's own
   rounding to vertices sets a floor under all).
 
+With ``--distortion N``, each map's geodesic distortion is printed as well, beside the ground
+truth's own: for N listed source vertices (seed 1) and their images, the mean over pairs of
+vertices of ``|d_1(x, y) - d_2(f(x), f(y))|`` (sqrt(area) units). A method that minimizes
+distortion cannot come closer to a truth that is less isometric than its own map.
+
 If ``default`` is near ``zoomout from truth``, the seeds are not what is lost; the gap between
 ``last steps from truth`` and ``best at k`` is what ZoomOut's iterations lose even from a right
 map; the ``best at k`` column across sizes is what a larger basis could win. Prints per group
@@ -59,6 +64,7 @@ from darcyan.geometry.knn import nearest_rows
 from darcyan.parallel import process_map
 
 LAST_STEPS = 10  # "last steps from truth": ZoomOut's iterations at sizes basis_size - 10 .. basis_size
+DISTORTION_SEED = 1  # numpy.random.default_rng seed of the --distortion vertices
 
 
 def true_pairs(shape_1, shape_2, truth) -> tuple:
@@ -81,8 +87,27 @@ def true_sample_maps(shape_1, shape_2, samples: tuple, source: np.ndarray, targe
     return maps[0], maps[1]
 
 
+def distortions(shape_1, shape_2, source: np.ndarray, target: np.ndarray, maps: dict, count: int) -> dict:
+    """name -> mean ``|d_1(x, y) - d_2(f(x), f(y))|`` over pairs of ``count`` listed source vertices
+    (local ``source``, drawn with seed :data:`DISTORTION_SEED`) for each map (input numbering) and
+    for the ground truth (``"truth"``: their listed images ``target``); geodesic distances by fast
+    marching, over the square root of each mesh's area."""
+    rows = np.random.default_rng(DISTORTION_SEED).choice(len(source), min(count, len(source)), replace=False)
+    chosen = source[rows]
+    images = {"truth": target[rows]}
+    for name, mapped in maps.items():
+        local = shape_2.mesh_index(mapped[shape_1.mesh.input_index[chosen]])
+        if (local >= 0).all():
+            images[name] = local
+    upper = np.triu_indices(len(chosen), k=1)
+    d_1 = np.array([shape_1.solver.distance(int(v))[chosen] for v in chosen])[upper] / np.sqrt(shape_1.mesh.area())
+    scale = np.sqrt(shape_2.mesh.area())
+    return {name: float(np.abs(d_1 - np.array([shape_2.solver.distance(int(v))[image] for v in image])[upper]
+                               / scale).mean()) for name, image in images.items()}
+
+
 def score_pair(task: tuple) -> dict:
-    dataset, source_name, target_name, group, sizes = task
+    dataset, source_name, target_name, group, sizes, distortion = task
     warnings.simplefilter("ignore")
     (shape_1, shape_2), correspondence, truth = prepared_pair(dataset, source_name, target_name)
     config = DenseConfig()
@@ -126,20 +151,27 @@ def score_pair(task: tuple) -> dict:
         c_21 = np.linalg.lstsq(b_2[target, :p], b_1[source, :k], rcond=None)[0]
         maps[f"best at {size}"] = read_out(c_12, c_21, b_1, b_2)
     scores = evaluate_dense_maps(shape_1.mesh, shape_2.mesh, maps, truth, target_solver=shape_2.solver)
-    return {"pair": f"{source_name}->{target_name}", "group": group,
-            **{name: {"rate": score.rate, "mean": float(np.minimum(score.errors, 1.0).mean())}
-               for name, score in scores.items()}}
+    result = {"pair": f"{source_name}->{target_name}", "group": group,
+              **{name: {"rate": score.rate, "mean": float(np.minimum(score.errors, 1.0).mean())}
+                 for name, score in scores.items()}}
+    if distortion:
+        result["distortion"] = distortions(shape_1, shape_2, source, target, maps, distortion)
+    return result
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     add_sample_arguments(parser)
     parser.add_argument("--sizes", type=int, nargs="+", default=[100], help="basis sizes of the 'best at k' maps")
+    parser.add_argument("--distortion", type=int, default=0, metavar="N",
+                        help="also each map's geodesic distortion, and the ground truth's, on N listed vertices")
     parser.add_argument("--out", type=Path)
     args = parser.parse_args(argv)
     try:
         if any(size < 1 for size in args.sizes):
             raise DarcyanError(f"--sizes must be positive, got {args.sizes}")
+        if args.distortion < 0 or args.distortion == 1:
+            raise DarcyanError(f"--distortion needs at least 2 vertices, got {args.distortion}")
         if args.count < 1:
             raise DarcyanError(f"count must be at least 1, got {args.count}")
         if args.out and not args.out.parent.is_dir():
@@ -152,7 +184,7 @@ def main(argv=None) -> int:
                 if not (DATA / args.dataset / "corres" / f"{name}.vts").is_file():
                     raise DarcyanError(f"{DATA / args.dataset / 'corres' / (name + '.vts')}: no such ground truth "
                                        f"(this diagnostic needs the dataset's .vts files)")
-        tasks = [(args.dataset, source, target, group, args.sizes) for source, target, group in pairs]
+        tasks = [(args.dataset, source, target, group, args.sizes, args.distortion) for source, target, group in pairs]
         results = list(process_map(score_pair, tasks, 2, ordered=True))
     except (OSError, DarcyanError) as exc:  # one line, no traceback (OSError names its file)
         print(f"dense_oracle.py: error: {exc}", file=sys.stderr)
@@ -165,7 +197,7 @@ def main(argv=None) -> int:
     if not results:
         print("dense_oracle.py: error: no pair has a dense map", file=sys.stderr)
         return 2
-    names = [name for name in results[0] if name not in ("pair", "group")]
+    names = [name for name in results[0] if name not in ("pair", "group", "distortion")]
     print("| group | pairs | " + " | ".join(names) + " |")
     print("| --- | ---: |" + " ---: |" * len(names))
     for group in sorted({r["group"] for r in results}) + ["all"]:
@@ -174,7 +206,23 @@ def main(argv=None) -> int:
                  for name in names]
         print(f"| {group} | {len(rows)} | " + " | ".join(cells) + " |")
     print("(share of sampled vertices within 0.05 / mean geodesic error, sqrt(area) units, means over pairs)")
+    if args.distortion:
+        print_distortions(results)
     return 0
+
+
+def print_distortions(results: list) -> None:
+    """The ``--distortion`` table: per group the mean distortion of the truth and of each map, and
+    in how many pairs the default map is less distorted than the truth."""
+    names = [name for name in results[0]["distortion"]]
+    print("\n| group | pairs | " + " | ".join(names) + " | default below truth |")
+    print("| --- | ---: |" + " ---: |" * (len(names) + 1))
+    for group in sorted({r["group"] for r in results}) + ["all"]:
+        rows = [r for r in results if group in ("all", r["group"])]
+        cells = [f"{np.mean([r['distortion'].get(name, np.nan) for r in rows]):.4f}" for name in names]
+        below = sum(r["distortion"].get("default", np.inf) < r["distortion"]["truth"] for r in rows)
+        print(f"| {group} | {len(rows)} | " + " | ".join(cells) + f" | {below} of {len(rows)} |")
+    print("(geodesic distortion: mean |d1(x, y) - d2(f(x), f(y))| over pairs of listed vertices, sqrt(area) units)")
 
 
 if __name__ == "__main__":

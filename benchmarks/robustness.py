@@ -9,7 +9,10 @@ second run into the same ``--out`` reuses the copies and the finished pairs:
 - ``decimated``: decimation to half the faces (fast-simplification; the few faces it leaves on
   non-manifold edges are dropped); each ground-truth sample moves to the nearest remaining vertex;
 - ``subdivided``: every triangle split in four at its edge midpoints (the same surface, four
-  times the faces; vertex numbering kept for the original vertices).
+  times the faces; vertex numbering kept for the original vertices);
+- ``inside-out``: every face flipped (the normals point in, as some exporters write them) and
+  three faces taken out, far apart (small holes: the surface is no longer closed); vertex
+  numbering kept.
 
 Every shape of the dataset is perturbed independently (a decimated source is matched to a
 decimated target with its own triangles). Moving a ground-truth sample to the nearest remaining
@@ -43,7 +46,8 @@ from darcyan.geometry.mesh import Mesh
 NOISE_LEVELS = (0.001, 0.005, 0.01)  # fractions of the bounding-box diagonal
 DECIMATION = 0.5  # fraction of the faces kept
 DEFAULT_CONDITIONS = ("clean",) + tuple(f"noise={level}" for level in NOISE_LEVELS) + ("decimated",)
-CONDITIONS = DEFAULT_CONDITIONS + ("subdivided",)
+CONDITIONS = DEFAULT_CONDITIONS + ("subdivided", "inside-out")
+HOLES = 3  # faces taken out of an inside-out copy
 
 
 def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0) -> None:
@@ -69,6 +73,8 @@ def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0)
 
             v, f = trimesh.remesh.subdivide(mesh.vertices, mesh.faces)  # keeps the old vertices first
             mesh = Mesh(v, f)
+        elif condition == "inside-out":
+            mesh = Mesh(mesh.vertices, np.delete(mesh.faces[:, ::-1], spread_faces(mesh, HOLES, rng), axis=0))
         save_mesh(mesh, target / path.name)
         for suffix in (".vts", ".sym.vts"):
             gt = source / "corres" / f"{path.stem}{suffix}"
@@ -79,6 +85,16 @@ def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0)
             else:
                 idx = np.loadtxt(gt, dtype=np.int64) - 1
                 np.savetxt(target / "corres" / gt.name, remap[idx] + 1, fmt="%d")
+
+
+def spread_faces(mesh: Mesh, count: int, rng) -> np.ndarray:
+    """``count`` face indices far apart: a random first face, then each the face whose centre is
+    farthest in space from those taken."""
+    centres = mesh.vertices[mesh.faces].mean(axis=1)
+    chosen = [int(rng.integers(mesh.n_faces))]
+    for _ in range(count - 1):
+        chosen.append(int(np.argmax(cKDTree(centres[chosen]).query(centres)[0])))
+    return np.array(chosen)
 
 
 def without_nonmanifold_edges(faces: np.ndarray) -> np.ndarray:

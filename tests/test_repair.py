@@ -237,3 +237,62 @@ def test_welded_copies_keep_their_results():
     # one numbering for both poses: most copies land on a copy of their own corner
     same_corner = np.linalg.norm(poses[1].vertices[result.target] - poses[1].vertices, axis=1) < 1e-9
     assert same_corner.mean() > 0.5
+
+
+def outward_share(mesh: Mesh, centre: np.ndarray) -> float:
+    """Share of the faces whose normals point away from ``centre``."""
+    v, f = mesh.vertices, mesh.faces
+    normals = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    return float((np.einsum("ij,ij->i", normals, v[f].mean(axis=1) - centre) > 0).mean())
+
+
+@pytest.mark.parametrize("holes", [0, 3])
+def test_an_inside_out_surface_is_turned_outward_holes_or_not(holes):
+    """Its normals decide the curvatures' signs and every turning sense: inside out, left and
+    right would swap (a FAUST pair: 1 of 5 matches right, before this)."""
+    sphere = synthetic.icosphere(3)
+    taken = [0, 400, 900][:holes]  # faces far apart: small holes, no vertex left without a face
+    inside_out = Mesh(sphere.vertices, np.delete(sphere.faces[:, ::-1], taken, axis=0), "inside out")
+    assert outward_share(inside_out, 0) == 0
+    prepared, changes = prepare_mesh(inside_out)
+    assert outward_share(prepared, 0) == 1 and prepared.n_faces == sphere.n_faces - holes
+    assert changes == ["flipped every face: the surface was inside out (its faces enclosed a negative volume)"]
+    right_way = Mesh(sphere.vertices, np.delete(sphere.faces, taken, axis=0), "outward")
+    prepared, changes = prepare_mesh(right_way)
+    assert (prepared.faces == right_way.faces).all() and changes == []
+
+
+@pytest.mark.parametrize("flip", [False, True])
+def test_a_patch_is_left_as_it_comes(flip):
+    """A bowl has no inside to tell (its fan across the rim is most of its area), nor has a flat
+    disc: either orientation is kept. A cylinder open at both ends is tested (its two end discs
+    are a quarter of its area) and keeps the outward one."""
+    sphere = synthetic.icosphere(3)
+    bowl_faces = sphere.faces[(sphere.vertices[sphere.faces][:, :, 2] < -0.3).all(axis=1)]
+    used = np.unique(bowl_faces)
+    renumber = np.full(sphere.n_vertices, -1)
+    renumber[used] = np.arange(len(used))
+    for patch in (Mesh(sphere.vertices[used], renumber[bowl_faces], "bowl"), synthetic.flat_disc()):
+        faces = patch.faces[:, ::-1].copy() if flip else patch.faces
+        prepared, changes = prepare_mesh(Mesh(patch.vertices, faces, patch.name))
+        assert (prepared.faces == faces).all() and changes == []
+    cylinder = synthetic.cylinder()
+    faces = cylinder.faces[:, ::-1].copy() if flip else cylinder.faces
+    prepared, _ = prepare_mesh(Mesh(cylinder.vertices, faces, "cylinder"))
+    assert outward_share(prepared, np.zeros(3)) > 0.99  # about the axis: z of the centre is 0
+    without_test = prepare_mesh(Mesh(cylinder.vertices, faces, "cylinder"), settings=Repairing(outward_cap_share=0.2))[0]
+    assert (without_test.faces == faces).all()
+
+
+def test_an_inside_out_person_with_holes_matches_as_the_right_way_out(faust, tmp_path, capsys):
+    """tr_reg_001 written inside out with three small holes matches tr_reg_000 as the file does."""
+    mesh = load_mesh(faust / "tr_reg_001.off")
+    copy = tmp_path / "tr_reg_001_inside_out.off"
+    save_mesh(Mesh(mesh.vertices, np.delete(mesh.faces[:, ::-1], [0, 3000, 6000], axis=0)), copy)
+    outputs = []
+    for target in (faust / "tr_reg_001.off", copy):
+        assert main(["match", str(faust / "tr_reg_000.off"), str(target), "--no-cache", "-q"]) == 0
+        out, err = capsys.readouterr()
+        outputs.append([line.split(",")[:2] for line in out.splitlines()])
+        assert ("inside out" in err) == (target == copy)
+    assert outputs[0] == outputs[1] and len(outputs[0]) >= 5

@@ -70,13 +70,22 @@ class Repairing:
             edges are ~1e6 times longer. 0: never weld.
         degenerate_area: a face whose area is below this fraction of the mean face area is
             degenerate (dropped under repair, refused without).
+        outward_cap_share: with or without repair, a surface whose faces enclose a negative
+            volume (it is inside out) gets every face flipped: its orientation decides left from
+            right. A surface with holes or cuts is closed for that test by a fan across each
+            boundary loop, and tested only when those fans' area is at most this share of its
+            own: closed but for holes and cut limbs. A patch or a one-sided scan has no inside
+            to tell (the same dent is concave from one side and convex from the other), and is
+            left as it comes.
     """
 
     weld_tolerance: float = _stage(1e-6, PREPARE)
     degenerate_area: float = _stage(1e-12, PREPARE)
+    outward_cap_share: float = _stage(0.25, PREPARE)
 
     def __post_init__(self) -> None:
         _check(self, ("weld_tolerance", "degenerate_area"), lambda v: _number(v) and 0 <= v < 1, "in [0, 1)")
+        _check(self, ("outward_cap_share",), lambda v: _number(v) and v >= 0, "non-negative")
 
 
 @dataclass(frozen=True)

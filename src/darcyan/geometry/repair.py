@@ -13,7 +13,9 @@ refuse anything else), in this order:
 4. non-manifold vertices (fans of faces meeting only at one vertex, "bow ties") are always split,
    one copy of the vertex per fan (:func:`split_nonmanifold`), with a :class:`MeshWarning`;
 5. the largest connected component, with a warning about what was left out;
-6. orientation: made consistent under ``repair``, then outward.
+6. orientation: made consistent under ``repair``, then outward (:func:`orient_outward`, with or
+   without ``repair``; holes and cuts are closed for that test by a fan across each, a patch
+   is left as it comes), with a note when every face was flipped.
 
 Every vertex keeps ``input_index``, its index in the input, through all of them: a welded vertex
 takes the smallest index of its group, every copy of a split vertex the index of the original.
@@ -154,7 +156,10 @@ def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairi
             raise MeshError(mesh.name, "the surface is not orientable (a Moebius strip?): no choice of "
                                        "face orientations agrees along every edge")
         changes.append(f"reoriented {flipped} faces to agree with their neighbours")
-    return _orient_outward(mesh), changes
+    outward = orient_outward(mesh, settings.outward_cap_share)
+    if outward is not mesh:
+        changes.append("flipped every face: the surface was inside out (its faces enclosed a negative volume)")
+    return outward, changes
 
 
 # ----------------------------------------------------------------------------------------------
@@ -420,13 +425,37 @@ def _orient_consistently(mesh: Mesh) -> tuple[Mesh, int]:
     return Mesh(mesh.vertices, faces, mesh.name, mesh.input_index), int(flipped.sum())
 
 
-def _orient_outward(mesh: Mesh) -> Mesh:
-    """Flip all faces if a closed (consistently oriented) mesh encloses negative volume."""
-    f = mesh.faces
-    _, counts = _edge_counts(f, mesh.n_vertices)
-    if (counts == 2).all():
-        v = mesh.vertices
-        volume = np.einsum("ij,ij->i", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]])).sum() / 6.0
-        if volume < 0:
-            return Mesh(mesh.vertices, f[:, ::-1].copy(), mesh.name, mesh.input_index)
+def orient_outward(mesh: Mesh, max_cap_share: float = 0.25) -> Mesh:
+    """``mesh`` with every face flipped if its consistently oriented faces enclose a negative
+    volume, else ``mesh`` itself. Each boundary loop is closed for the test by a fan from the
+    loop's centroid (the signed volume of a closed chain of triangles is well defined); a mesh
+    whose fans have more than ``max_cap_share`` of its area is returned as it is (a patch has no
+    inside to tell). Without this, an inside-out file turns every turning sense around, and its
+    left and right are swapped."""
+    f, v = mesh.faces, mesh.vertices
+    reference = v.mean(axis=0)  # signed volumes about a point near the mesh: fewer digits lost
+    u = v - reference
+    volume = np.einsum("ij,ij->i", u[f[:, 0]], np.cross(u[f[:, 1]], u[f[:, 2]])).sum() / 6.0
+    tail, head = f.ravel(), f[:, [1, 2, 0]].ravel()  # every face's directed edges
+    n = mesh.n_vertices
+    directed = tail * n + head
+    boundary = ~np.isin(directed, head * n + tail)  # no face crosses the edge the other way
+    if boundary.any():
+        import scipy.sparse as sp
+        from scipy.sparse.csgraph import connected_components
+
+        a, b = tail[boundary], head[boundary]
+        graph = sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
+        _, loop_of = connected_components(graph, directed=False)
+        loops, loop = np.unique(loop_of[a], return_inverse=True)
+        centre = np.zeros((len(loops), 3))
+        np.add.at(centre, loop, u[a])
+        centre /= np.bincount(loop)[:, None]
+        c = centre[loop]  # the fan (c, b, a) closes each boundary edge a -> b against its face
+        fan = np.cross(u[b] - c, u[a] - c)
+        if 0.5 * np.linalg.norm(fan, axis=1).sum() > max_cap_share * mesh.area():
+            return mesh
+        volume += np.einsum("ij,ij->i", c, np.cross(u[b], u[a])).sum() / 6.0
+    if volume < 0:
+        return Mesh(mesh.vertices, f[:, ::-1].copy(), mesh.name, mesh.input_index)
     return mesh
