@@ -123,6 +123,36 @@ def test_soup_is_refused_without_repair_and_welded_back_with_it(tosca):
     np.testing.assert_allclose(analysis.feature_agd, original.feature_agd, rtol=1e-6)
 
 
+def split_along_equator(mesh: Mesh) -> Mesh:
+    """``mesh`` (a sphere about the origin) cut open along z = 0: the faces above get their own
+    copies of the vertices they share with those below (a file split along a texture seam)."""
+    above = mesh.vertices[mesh.faces].mean(axis=1)[:, 2] > 0
+    shared = np.intersect1d(mesh.faces[above], mesh.faces[~above])
+    copy = np.arange(mesh.n_vertices)
+    copy[shared] = mesh.n_vertices + np.arange(len(shared))
+    faces = np.where(above[:, None], copy[mesh.faces], mesh.faces)
+    return Mesh(np.vstack([mesh.vertices, mesh.vertices[shared]]), faces, "seamed sphere")
+
+
+def test_a_surface_split_along_seams_is_refused_without_repair_and_welded_with_it():
+    """Taken as it comes, each seam would be the rim of a cut and a piece a component left out."""
+    sphere = synthetic.icosphere(3)
+    seamed = split_along_equator(sphere)
+    copies = seamed.n_vertices - sphere.n_vertices
+    assert copies > 20
+    with pytest.raises(MeshError, match=f"{2 * copies} boundary vertices coincide with others .*--repair welds"):
+        prepare_mesh(seamed)
+    welded, changes = prepare_mesh(seamed, repair=True)
+    assert welded.n_vertices == sphere.n_vertices and changes[0].startswith(f"welded {copies} coincident")
+    assert _edge_counts(welded.faces, welded.n_vertices)[1].min() == 2  # closed again
+    cap = Mesh(seamed.vertices, seamed.faces[seamed.vertices[seamed.faces].mean(axis=1)[:, 2] > 0], "cap")
+    used = np.unique(cap.faces)
+    renumber = np.full(cap.n_vertices, -1)
+    renumber[used] = np.arange(len(used))
+    cap = Mesh(cap.vertices[used], renumber[cap.faces], "cap")
+    assert prepare_mesh(cap)[0].n_faces == cap.n_faces  # one side of the seam alone is valid as it is
+
+
 def test_weld_tolerance_zero_never_welds():
     # A plane's strip of 2 x 2 squares cut along its middle column of vertices: the copies sit
     # exactly on the originals, on the boundary; the default welds them, 0 leaves them.

@@ -6,7 +6,8 @@ refuse anything else), in this order:
 
 1. strict checks (:func:`check_mesh`): size, finite coordinates, face indices in range;
 2. coincident vertices on the boundary: welded under ``repair`` (:func:`weld_vertices`); a
-   triangle soup (faces that share no vertex) is refused without it, with a message saying so;
+   triangle soup (faces that share no vertex) or a surface split along seams is refused without
+   it, with a message saying so;
 3. repairable defects (:func:`inspect_mesh`): duplicate and degenerate faces, unreferenced
    vertices, non-manifold edges (more than two faces on one edge). Without ``repair`` they are one
    error naming the option; with it faces and vertices are dropped and edges split apart;
@@ -120,6 +121,8 @@ def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairi
             changes.append(f"welded {before - mesh.n_vertices} coincident vertices into others "
                            f"({mesh.n_vertices} vertices left)")
     _refuse_soup(mesh, repair, settings.weld_tolerance)
+    if not repair:
+        _refuse_seams(mesh, settings.weld_tolerance)
 
     report = inspect_mesh(mesh, settings.degenerate_area)
     droppable = []
@@ -177,18 +180,13 @@ def weld_vertices(mesh: Mesh, tolerance: float = Repairing().weld_tolerance) -> 
     index; the others are dropped and their faces renumbered (faces this collapses are left to
     :func:`inspect_mesh`). Returns ``mesh`` itself when nothing is welded, or ``tolerance`` is 0.
     """
-    open_ = np.flatnonzero(boundary_vertices(mesh))
-    if not len(open_) or tolerance <= 0:
-        return mesh  # closed: nothing to weld (and no need to import scipy.spatial, 0.1-0.2 s)
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
-    v, f, n = mesh.vertices, mesh.faces, mesh.n_vertices
-    mean_edge = float(np.linalg.norm(v[f] - v[f[:, [1, 2, 0]]], axis=2).mean())
-    pairs = open_[cKDTree(v[open_]).query_pairs(tolerance * mean_edge, output_type="ndarray")]
+    pairs = coincident_boundary_pairs(mesh, tolerance)
     if not len(pairs):
         return mesh
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    v, f, n = mesh.vertices, mesh.faces, mesh.n_vertices
     graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     _, group = connected_components(graph, directed=False)
     by_group = np.lexsort((mesh.input_index, group))  # each group's smallest input index first
@@ -200,6 +198,29 @@ def weld_vertices(mesh: Mesh, tolerance: float = Repairing().weld_tolerance) -> 
     new_index[kept] = np.arange(len(kept))
     faces = new_index[representative[group]][f]
     return Mesh(v[kept], faces, mesh.name, mesh.input_index[kept])
+
+
+def coincident_boundary_pairs(mesh: Mesh, tolerance: float) -> np.ndarray:
+    """``(p, 2)`` pairs of boundary vertices closer than ``tolerance`` times the mean edge length
+    (none when the mesh is closed or ``tolerance`` is 0)."""
+    open_ = np.flatnonzero(boundary_vertices(mesh))
+    if not len(open_) or tolerance <= 0:
+        return np.zeros((0, 2), dtype=np.int64)  # closed: no need to import scipy.spatial, 0.1-0.2 s
+    from scipy.spatial import cKDTree
+
+    v, f = mesh.vertices, mesh.faces
+    mean_edge = float(np.linalg.norm(v[f] - v[f[:, [1, 2, 0]]], axis=2).mean())
+    return open_[cKDTree(v[open_]).query_pairs(tolerance * mean_edge, output_type="ndarray")].reshape(-1, 2)
+
+
+def _refuse_seams(mesh: Mesh, tolerance: float) -> None:
+    """Refuse (without repair) a mesh whose boundary vertices coincide: a file split along seams
+    (for textures, or by the program that wrote it) is one surface cut open, and taken as it comes
+    its seams would be read as the rims of cuts and its pieces as components to leave out."""
+    pairs = coincident_boundary_pairs(mesh, tolerance)
+    if len(pairs):
+        raise MeshError(mesh.name, f"{len(np.unique(pairs))} boundary vertices coincide with others (a surface split "
+                                   f"along seams?); --repair welds them")
 
 
 def _refuse_soup(mesh: Mesh, repair: bool, tolerance: float) -> None:
