@@ -10,9 +10,11 @@ second run into the same ``--out`` reuses the copies and the finished pairs:
   non-manifold edges are dropped); each ground-truth sample moves to the nearest remaining vertex;
 - ``subdivided``: every triangle split in four at its edge midpoints (the same surface, four
   times the faces; vertex numbering kept for the original vertices);
-- ``inside-out``: every face flipped (the normals point in, as some exporters write them) and
-  three faces taken out, far apart (small holes: the surface is no longer closed); vertex
-  numbering kept.
+- ``holes``: three faces taken out of every shape, far apart (small holes: no surface is
+  closed); vertex numbering kept;
+- ``inside-out``: every other shape (in name order) with every face flipped (the normals point
+  in, as some exporters write them), and three faces taken out of every shape, far apart (small
+  holes: no surface is closed); vertex numbering kept.
 
 Every shape of the dataset is perturbed independently (a decimated source is matched to a
 decimated target with its own triangles). Moving a ground-truth sample to the nearest remaining
@@ -46,15 +48,15 @@ from darcyan.geometry.mesh import Mesh
 NOISE_LEVELS = (0.001, 0.005, 0.01)  # fractions of the bounding-box diagonal
 DECIMATION = 0.5  # fraction of the faces kept
 DEFAULT_CONDITIONS = ("clean",) + tuple(f"noise={level}" for level in NOISE_LEVELS) + ("decimated",)
-CONDITIONS = DEFAULT_CONDITIONS + ("subdivided", "inside-out")
-HOLES = 3  # faces taken out of an inside-out copy
+CONDITIONS = DEFAULT_CONDITIONS + ("subdivided", "holes", "inside-out")
+HOLES = 3  # faces taken out of each shape of the holes and inside-out copies
 
 
 def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0) -> None:
     """Write ``source``'s meshes and ground truth, perturbed by ``condition``, into ``target``."""
     rng = np.random.default_rng(seed)
     (target / "corres").mkdir(parents=True, exist_ok=True)
-    for path in sorted(source.glob("*.off")):
+    for number, path in enumerate(sorted(source.glob("*.off"))):
         mesh = load_mesh(path)
         remap = None
         if condition.startswith("noise"):
@@ -73,8 +75,9 @@ def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0)
 
             v, f = trimesh.remesh.subdivide(mesh.vertices, mesh.faces)  # keeps the old vertices first
             mesh = Mesh(v, f)
-        elif condition == "inside-out":
-            mesh = Mesh(mesh.vertices, np.delete(mesh.faces[:, ::-1], spread_faces(mesh, HOLES, rng), axis=0))
+        elif condition in ("holes", "inside-out"):
+            faces = mesh.faces[:, ::-1] if number % 2 and condition == "inside-out" else mesh.faces
+            mesh = Mesh(mesh.vertices, np.delete(faces, spread_faces(mesh, HOLES, rng), axis=0))
         save_mesh(mesh, target / path.name)
         for suffix in (".vts", ".sym.vts"):
             gt = source / "corres" / f"{path.stem}{suffix}"

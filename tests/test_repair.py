@@ -284,11 +284,12 @@ def test_an_inside_out_surface_is_turned_outward_holes_or_not(holes):
     taken = [0, 400, 900][:holes]  # faces far apart: small holes, no vertex left without a face
     inside_out = Mesh(sphere.vertices, np.delete(sphere.faces[:, ::-1], taken, axis=0), "inside out")
     assert outward_share(inside_out, 0) == 0
-    prepared, changes = prepare_mesh(inside_out)
+    kept_open = Repairing(hole_edges=0)  # the holes left open: the test closes them by fans of its own
+    prepared, changes = prepare_mesh(inside_out, settings=kept_open)
     assert outward_share(prepared, 0) == 1 and prepared.n_faces == sphere.n_faces - holes
     assert changes == ["flipped every face: the surface was inside out (its faces enclosed a negative volume)"]
     right_way = Mesh(sphere.vertices, np.delete(sphere.faces, taken, axis=0), "outward")
-    prepared, changes = prepare_mesh(right_way)
+    prepared, changes = prepare_mesh(right_way, settings=kept_open)
     assert (prepared.faces == right_way.faces).all() and changes == []
 
 
@@ -315,7 +316,8 @@ def test_a_patch_is_left_as_it_comes(flip):
 
 
 def test_an_inside_out_person_with_holes_matches_as_the_right_way_out(faust, tmp_path, capsys):
-    """tr_reg_001 written inside out with three small holes matches tr_reg_000 as the file does."""
+    """tr_reg_001 written inside out with three small holes matches tr_reg_000 as the file does
+    (its holes closed, then every face flipped)."""
     mesh = load_mesh(faust / "tr_reg_001.off")
     copy = tmp_path / "tr_reg_001_inside_out.off"
     save_mesh(Mesh(mesh.vertices, np.delete(mesh.faces[:, ::-1], [0, 3000, 6000], axis=0)), copy)
@@ -326,3 +328,32 @@ def test_an_inside_out_person_with_holes_matches_as_the_right_way_out(faust, tmp
         outputs.append([line.split(",")[:2] for line in out.splitlines()])
         assert ("inside out" in err) == (target == copy)
     assert outputs[0] == outputs[1] and len(outputs[0]) >= 5
+
+
+def test_small_holes_are_closed_between_their_own_vertices_and_cuts_are_not():
+    """A hole (a boundary loop shorter than ``hole_length``) gets a fan of faces oriented like its
+    neighbours, no new vertex; a longer loop (a cut) stays open; 0 closes none."""
+    sphere = synthetic.icosphere(4)  # edges about 0.02 sqrt(area): a one-face hole's loop 0.07
+    holed = Mesh(sphere.vertices, np.delete(sphere.faces, 400, axis=0), "holed")
+    prepared, changes = prepare_mesh(holed)
+    assert prepared.n_faces == sphere.n_faces and prepared.n_vertices == sphere.n_vertices
+    assert _edge_counts(prepared.faces, prepared.n_vertices)[1].min() == 2  # closed, manifold
+    assert sorted(prepared.faces[-1]) == sorted(sphere.faces[400])
+    assert outward_share(prepared, np.zeros(3)) == 1  # the new face turned like its neighbours
+    assert changes == ["closed 1 small hole (boundary loops of at most 8 edges, shorter than 0.1 sqrt(area)) "
+                       "with 1 faces between their own vertices"]
+    assert prepare_mesh(holed, settings=Repairing(hole_length=0))[0].n_faces == holed.n_faces
+    assert prepare_mesh(holed, settings=Repairing(hole_edges=2))[0].n_faces == holed.n_faces
+
+    # the faces around a vertex, and the vertex with them: a hexagonal hole (loop about 0.14)
+    ring = (sphere.faces == 100).any(axis=1)
+    used = np.unique(sphere.faces[~ring])
+    renumber = np.full(sphere.n_vertices, -1)
+    renumber[used] = np.arange(len(used))
+    ringed = Mesh(sphere.vertices[used], renumber[sphere.faces[~ring]], "ring hole")
+    assert prepare_mesh(ringed)[0].n_faces == ringed.n_faces  # longer than 0.1: a cut, left open
+    assert prepare_mesh(ringed, settings=Repairing(hole_length=0.2, hole_edges=5))[0].n_faces == ringed.n_faces
+    prepared, changes = prepare_mesh(ringed, settings=Repairing(hole_length=0.2))
+    assert prepared.n_faces == ringed.n_faces + ring.sum() - 2 and "closed 1 small hole" in changes[0]
+    assert _edge_counts(prepared.faces, prepared.n_vertices)[1].min() == 2
+    assert outward_share(prepared, np.zeros(3)) == 1

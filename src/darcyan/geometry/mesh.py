@@ -66,8 +66,13 @@ class Mesh:
         return len(self.faces)
 
     def face_areas(self) -> np.ndarray:
-        """``(m,)`` triangle areas."""
-        return face_areas(self.vertices, self.faces)
+        """``(m,)`` triangle areas (computed once, read-only: a mesh is not changed in place)."""
+        cached = self.__dict__.get("_face_areas")
+        if cached is None:
+            cached = face_areas(self.vertices, self.faces)
+            cached.flags.writeable = False
+            object.__setattr__(self, "_face_areas", cached)
+        return cached
 
     def area(self) -> float:
         return float(self.face_areas().sum())
