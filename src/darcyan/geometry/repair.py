@@ -469,9 +469,10 @@ def boundary_half_edges(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
     return tail[once], head[once]
 
 
-def boundary_loops(mesh: Mesh) -> list:
-    """Each boundary loop of a manifold, consistently oriented mesh as an array of vertices in
-    the direction of its faces' edges (``loop[i] -> loop[i + 1]`` is an edge of a face)."""
+def boundary_loop_vertices(mesh: Mesh) -> list:
+    """Each boundary loop of a manifold, consistently oriented mesh as an array of its vertices in
+    order, in the direction of its faces' edges (``loop[i] -> loop[i + 1]`` is an edge of a face;
+    :func:`darcyan.geometry.mesh.boundary_loops` labels the loops and gives their lengths)."""
     tail, head = boundary_half_edges(mesh)
     following = np.full(mesh.n_vertices, -1, dtype=np.int64)
     following[tail] = head
@@ -494,8 +495,8 @@ def fill_small_holes(mesh: Mesh, max_length: float, max_edges: int,
     ``max_edges`` edges and shorter than ``max_length`` (sqrt(area) units) closed by a fan of
     faces from its first vertex, oriented like the faces around it; no vertex is added, so the
     numbering stays the input's. A loop whose fan would repeat an edge the mesh has (a diagonal
-    already joined) is left open. ``loops``: the mesh's :func:`boundary_loops`, if known."""
-    loops = boundary_loops(mesh) if loops is None else loops
+    already joined) is left open. ``loops``: the mesh's :func:`boundary_loop_vertices`, if known."""
+    loops = boundary_loop_vertices(mesh) if loops is None else loops
     if not loops or max_length <= 0 or max_edges < 3:
         return mesh, 0, 0, loops
     v, n = mesh.vertices, mesh.n_vertices
@@ -526,7 +527,7 @@ def fill_small_holes(mesh: Mesh, max_length: float, max_edges: int,
 def orient_outward(mesh: Mesh, max_cap_share: float = 0.25, loops: list | None = None) -> Mesh:
     """``mesh`` with every face flipped if its consistently oriented faces enclose a negative
     volume, else ``mesh`` itself. Each boundary loop (``loops``: the mesh's
-    :func:`boundary_loops`, if known) is closed for the test by a fan from the loop's centroid
+    :func:`boundary_loop_vertices`, if known) is closed for the test by a fan from the loop's centroid
     (the signed volume of a closed chain of triangles is well defined); a mesh whose fans have
     more than ``max_cap_share`` of its area is returned as it is (a patch has no inside to tell).
     Without this, an inside-out file turns every turning sense around, and its left and right
@@ -535,7 +536,7 @@ def orient_outward(mesh: Mesh, max_cap_share: float = 0.25, loops: list | None =
     reference = v.mean(axis=0)  # signed volumes about a point near the mesh: fewer digits lost
     u = v - reference
     volume = np.einsum("ij,ij->i", u[f[:, 0]], np.cross(u[f[:, 1]], u[f[:, 2]])).sum() / 6.0
-    loops = boundary_loops(mesh) if loops is None else loops
+    loops = boundary_loop_vertices(mesh) if loops is None else loops
     if loops:
         a = np.concatenate(loops)
         b = np.concatenate([np.roll(loop, -1) for loop in loops])
