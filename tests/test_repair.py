@@ -340,7 +340,7 @@ def test_small_holes_are_closed_between_their_own_vertices_and_cuts_are_not():
     assert _edge_counts(prepared.faces, prepared.n_vertices)[1].min() == 2  # closed, manifold
     assert sorted(prepared.faces[-1]) == sorted(sphere.faces[400])
     assert outward_share(prepared, np.zeros(3)) == 1  # the new face turned like its neighbours
-    assert changes == ["closed 1 small hole (boundary loops of at most 8 edges, shorter than 0.1 sqrt(area)) "
+    assert changes == ["closed 1 small hole (boundary loops of at most 4 edges, shorter than 0.1 sqrt(area)) "
                        "with 1 faces between their own vertices"]
     assert prepare_mesh(holed, settings=Repairing(hole_length=0))[0].n_faces == holed.n_faces
     assert prepare_mesh(holed, settings=Repairing(hole_edges=2))[0].n_faces == holed.n_faces
@@ -351,9 +351,9 @@ def test_small_holes_are_closed_between_their_own_vertices_and_cuts_are_not():
     renumber = np.full(sphere.n_vertices, -1)
     renumber[used] = np.arange(len(used))
     ringed = Mesh(sphere.vertices[used], renumber[sphere.faces[~ring]], "ring hole")
-    assert prepare_mesh(ringed)[0].n_faces == ringed.n_faces  # longer than 0.1: a cut, left open
+    assert prepare_mesh(ringed)[0].n_faces == ringed.n_faces  # six edges, longer than 0.1: left open
     assert prepare_mesh(ringed, settings=Repairing(hole_length=0.2, hole_edges=5))[0].n_faces == ringed.n_faces
-    prepared, changes = prepare_mesh(ringed, settings=Repairing(hole_length=0.2))
+    prepared, changes = prepare_mesh(ringed, settings=Repairing(hole_length=0.2, hole_edges=6))
     assert prepared.n_faces == ringed.n_faces + ring.sum() - 2 and "closed 1 small hole" in changes[0]
     assert _edge_counts(prepared.faces, prepared.n_vertices)[1].min() == 2
     assert outward_share(prepared, np.zeros(3)) == 1

@@ -78,22 +78,23 @@ class Repairing:
             to tell (the same dent is concave from one side and convex from the other), and is
             left as it comes.
         hole_length, hole_edges: with or without repair, a boundary loop of at most
-            ``hole_edges`` edges and shorter than ``hole_length`` (sqrt(area)) is a hole where
-            faces were lost (a face, a vertex's ring), not a cut or an opening of the model, and
-            is closed by a fan of faces between its own vertices (no vertex is added), with a
-            note. Left open, a hole inside a feature point's grid cuts its level curves and
-            changes its descriptor: three one-face holes, two of them 0.11 from a feature point,
-            turned 4 of the 97 FAUST test pairs into left/right swaps. The eyes and mouths of the
-            TOSCA models (loops of 26 to 38 edges, 0.04 to 0.08 long) stay open, as does anything
-            ``rims.min_length`` (0.1) or longer, which may be a cut's rim (``docs/parameters.md``,
-            "Small holes"). 0: no hole is closed.
+            ``hole_edges`` edges and shorter than ``hole_length`` (sqrt(area)) is a hole where a
+            face or two were lost (by a scanner, an exporter), not a cut or an opening of the
+            model, and is closed by a fan of faces between its own vertices (no vertex is added),
+            with a note. Left open, a hole inside a feature point's grid cuts its level curves
+            and changes its descriptor: three one-face holes, two of them 0.11 from a feature
+            point, turned 4 of the 97 FAUST test pairs into left/right swaps. 4 edges: at 8, the
+            six-edge holes of 19 tosca-hires meshes were closed too, which swapped one david pair
+            and, by changing ZoomOut's random samples, cost michael0 -> michael10's dense map 10
+            points (``docs/parameters.md``, "Small holes"). Anything ``rims.min_length`` (0.1) or
+            longer may be a cut's rim and stays open. 0: no hole is closed.
     """
 
     weld_tolerance: float = _stage(1e-6, PREPARE)
     degenerate_area: float = _stage(1e-12, PREPARE)
     outward_cap_share: float = _stage(0.25, PREPARE)
     hole_length: float = _stage(0.1, PREPARE)
-    hole_edges: int = _stage(8, PREPARE)
+    hole_edges: int = _stage(4, PREPARE)
 
     def __post_init__(self) -> None:
         _check(self, ("weld_tolerance", "degenerate_area"), lambda v: _number(v) and 0 <= v < 1, "in [0, 1)")
