@@ -47,10 +47,12 @@ class CoarseProxy:
             warnings.simplefilter("ignore")  # a sliver component dropped by decimation is no news
             # Never welded: decimation merges vertices, it leaves no copies of one (none were
             # welded on any tosca-hires proxy), and the search would import scipy.spatial, 0.2 s.
-            # Nor are holes closed: decimation shrinks a model's openings (the TOSCA eyes) to a
-            # few edges, and the copy must keep the surface of the mesh it stands for.
+            # Nor are holes closed, nor an open copy turned: decimation shrinks a model's openings
+            # (the TOSCA eyes) to a few edges and its rims to fewer, and the copy must keep the
+            # surface and the orientation of the mesh it stands for.
             self.mesh, _ = prepare_mesh(Mesh(v, f, name=f"{full.name} (decimated)"), repair=True,
-                                        settings=Repairing(weld_tolerance=0.0, hole_edges=0))
+                                        settings=Repairing(weld_tolerance=0.0, hole_edges=0,
+                                                          outward_cap_share=0.0))
         self.solver = GeodesicSolver(self.mesh)
         self._faces, self._bary = self.solver.locate(full.vertices)
 

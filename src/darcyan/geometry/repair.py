@@ -32,7 +32,7 @@ import numpy as np
 
 from ..config import Repairing
 from ..errors import MeshError
-from .mesh import Mesh, MeshWarning, _edge_counts, boundary_vertices
+from .mesh import Mesh, MeshWarning, _edge_counts, boundary_vertices, face_areas
 
 MIN_VERTICES = 4
 MIN_FACES = 2
@@ -162,7 +162,8 @@ def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairi
             raise MeshError(mesh.name, "the surface is not orientable (a Moebius strip?): no choice of "
                                        "face orientations agrees along every edge")
         changes.append(f"reoriented {flipped} faces to agree with their neighbours")
-    mesh, holes, added, loops = fill_small_holes(mesh, settings.hole_length, settings.hole_edges)
+    mesh, holes, added, loops = fill_small_holes(mesh, settings.hole_length, settings.hole_edges,
+                                                 degenerate_area=settings.degenerate_area)
     if holes:
         changes.append(f"closed {holes} small hole{'s' * (holes > 1)} (boundary loops of at most "
                        f"{settings.hole_edges} edges, shorter than {settings.hole_length:g} sqrt(area)) "
@@ -495,13 +496,15 @@ def boundary_loop_vertices(mesh: Mesh) -> list:
     return loops
 
 
-def fill_small_holes(mesh: Mesh, max_length: float, max_edges: int,
-                     loops: list | None = None) -> tuple[Mesh, int, int, list]:
+def fill_small_holes(mesh: Mesh, max_length: float, max_edges: int, loops: list | None = None,
+                     degenerate_area: float = Repairing().degenerate_area) -> tuple[Mesh, int, int, list]:
     """``(mesh, holes closed, faces added, loops left open)``: every boundary loop of at most
     ``max_edges`` edges and shorter than ``max_length`` (sqrt(area) units) closed by a fan of
     faces from its first vertex, oriented like the faces around it; no vertex is added, so the
-    numbering stays the input's. A loop whose fan would repeat an edge the mesh has (a diagonal
-    already joined) is left open. ``loops``: the mesh's :func:`boundary_loop_vertices`, if known."""
+    numbering stays the input's. A loop is left open when its fan would repeat an edge the mesh
+    has (a diagonal already joined) or hold a face below ``degenerate_area`` times the mean face
+    area (the hole a dropped zero-area face leaves, two copies of a split vertex on one loop).
+    ``loops``: the mesh's :func:`boundary_loop_vertices`, if known."""
     loops = boundary_loop_vertices(mesh) if loops is None else loops
     if not loops or max_length <= 0 or max_edges < 3:
         return mesh, 0, 0, loops
@@ -523,7 +526,11 @@ def fill_small_holes(mesh: Mesh, max_length: float, max_edges: int,
             continue
         # loop[i] -> loop[i + 1] is its face's edge: the fan crosses it the other way (loops share
         # no vertex, so no two fans share a diagonal)
-        added.append(np.stack([np.full(len(rim) - 1, apex), rim[1:], rim[:-1]], axis=1))
+        fan = np.stack([np.full(len(rim) - 1, apex), rim[1:], rim[:-1]], axis=1)
+        if face_areas(v, fan).min() <= degenerate_area * mesh.area() / mesh.n_faces:
+            left.append(loop)
+            continue
+        added.append(fan)
     if not added:
         return mesh, 0, 0, loops
     fill = np.vstack(added)
