@@ -67,6 +67,10 @@ def main(argv=None) -> int:
     parser.add_argument("--share", type=float, default=Repairing().outward_cap_share,
                         help="outward_cap_share to test (default: the config's)")
     args = parser.parse_args(argv)
+    for name, value, low in (("--centres", args.centres, 1), ("--shapes", args.shapes, 1), ("--share", args.share, 0)):
+        if not value >= low:
+            print(f"outward.py: error: {name} must be at least {low}, got {value}", file=sys.stderr)
+            return 2
     missing = [d for d in args.datasets if not (DATA / d).is_dir()]
     if missing:
         print(f"outward.py: error: {DATA / missing[0]}: no such dataset folder (set DARCYAN_DATA)", file=sys.stderr)
