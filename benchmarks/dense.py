@@ -24,7 +24,8 @@ import time
 from pathlib import Path
 
 from darcyan import DarcyanConfig
-from darcyan.dense.maps import DenseConfig, dense_map, pyfm_own_map
+from darcyan.dense.config import DenseConfig
+from darcyan.dense.maps import dense_map, pyfm_own_map
 from darcyan.eval.dense_scores import evaluate_dense_maps
 from darcyan.io.mesh_files import load_mesh
 from darcyan.method.pipeline import analyze_mesh, match_shapes

@@ -15,7 +15,7 @@ For each of N pairs drawn (seed 0) from PAIRS (``source<TAB>target[<TAB>group]``
   eigenfunctions of the other shape, like the dense map's own) fitted by plain least squares
   (without the commutativity shrinkage of the dense map's fits) to the true correspondence of
   every listed vertex, read out by the dense map's own final step
-  (:func:`darcyan.dense.maps.read_out_map`). No map read out of k eigenfunctions does much
+  (:func:`darcyan.dense.zoomout.read_out_map`). No map read out of k eigenfunctions does much
   better: it bounds what ZoomOut could reach with this basis (and the ground truth's own
   rounding to vertices sets a floor under all).
 
@@ -43,21 +43,11 @@ from pathlib import Path
 import numpy as np
 from dense_variants import DATA, add_sample_arguments, prepared_pair, read_pair_lines  # the sibling script
 
-from darcyan.dense.maps import (
-    DENSE_FAILURES,
-    DenseConfig,
-    dense_basis,
-    dense_eigenvalues,
-    dense_map,
-    fit_width,
-    input_map,
-    landmark_coordinates,
-    read_out_map,
-    signature_coordinates,
-    signature_turn_coordinates,
-    zoomout,
-    zoomout_samples,
-)
+from darcyan.dense.config import DenseConfig
+from darcyan.dense.landmarks import landmark_coordinates
+from darcyan.dense.maps import DENSE_FAILURES, dense_map, input_map
+from darcyan.dense.signatures import signature_coordinates, signature_turn_coordinates
+from darcyan.dense.zoomout import dense_basis, dense_eigenvalues, fit_width, read_out_map, zoomout, zoomout_samples
 from darcyan.errors import DarcyanError
 from darcyan.eval.dense_scores import evaluate_dense_maps
 from darcyan.geometry.knn import nearest_rows

@@ -30,7 +30,9 @@ from pathlib import Path
 
 from dense_variants import add_sample_arguments, prepared_pair, read_pair_lines  # the sibling script
 
-from darcyan.dense.maps import DenseConfig, chosen_seed, dense_map, seed_scores
+from darcyan.dense.config import DenseConfig
+from darcyan.dense.maps import dense_map
+from darcyan.dense.seeds import chosen_seed, seed_scores
 from darcyan.errors import DarcyanError
 from darcyan.eval.dense_scores import evaluate_dense_maps
 from darcyan.parallel import process_map

@@ -6,7 +6,7 @@ defaults were chosen, ``docs/parameters.md``).
 
 For each of N pairs drawn (seed 0) from PAIRS (``source<TAB>target[<TAB>group]``), the shapes are
 described and matched once with darcyan's defaults, and a dense map is made with each variant of
-:class:`darcyan.dense.maps.DenseConfig` (a JSON object: name -> fields to change). Each map is
+:class:`darcyan.dense.config.DenseConfig` (a JSON object: name -> fields to change). Each map is
 scored on the same 1000 source vertices (the dataset's ``.vts`` ground truth, else the identity).
 Prints, per group and overall, the mean over pairs of the share within 0.05, of the mean error
 (errors capped at 1) and of the seconds of the dense stage; ``--out`` keeps every pair's figures
@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from darcyan import DarcyanConfig
-from darcyan.dense.maps import DenseConfig, dense_map
+from darcyan.dense.config import DenseConfig
+from darcyan.dense.maps import dense_map
 from darcyan.errors import DarcyanError
 from darcyan.eval.dense_scores import evaluate_dense_maps
 from darcyan.eval.metrics import GroundTruth, read_vts

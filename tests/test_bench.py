@@ -390,13 +390,13 @@ def test_bench_verifies_the_matchings_in_doubt(capsys, tmp_path, figures, monkey
         if verified:
             first = {(r["source"], r["target"]): r.get("verified") for r in records}
     # Again, into another folder: the verifications come from the cache (as `darcyan match`'s do).
-    import darcyan.dense.maps
+    import darcyan.dense.seeds
     import darcyan.dense.verify
 
     def recompute(*args, **kwargs):
         raise AssertionError("verified again")
 
-    for module in (darcyan.dense.maps, darcyan.dense.verify):
+    for module in (darcyan.dense.seeds, darcyan.dense.verify):
         monkeypatch.setattr(module, "verified_matches", recompute)
     settings = tmp_path / "verify100.json"
     code, _, err = run(capsys, "bench", figures, "--pairs", pairs, "--config", settings, "--out", tmp_path / "again", "-q")

@@ -11,14 +11,9 @@ from conftest import vts_truth
 
 from darcyan import DarcyanConfig
 from darcyan.cli import main
-from darcyan.dense.maps import (
-    MAX_EXHAUSTIVE_LANDMARKS,
-    UNMAPPED,
-    DenseConfig,
-    consistent_landmarks,
-    dense_map,
-    dense_map_to_csv,
-)
+from darcyan.dense.config import DenseConfig
+from darcyan.dense.landmarks import MAX_EXHAUSTIVE_LANDMARKS, consistent_landmarks
+from darcyan.dense.maps import UNMAPPED, dense_map, dense_map_to_csv
 from darcyan.errors import ConfigError, DarcyanError
 from darcyan.eval.dense_scores import evaluate_dense
 from darcyan.eval.metrics import GroundTruth
@@ -271,7 +266,7 @@ def test_orientation_coordinates_are_the_area_weighted_sines_of_numpys_cross_pro
     product out for speed), with the shape's kept face frame or without one."""
     import types
 
-    from darcyan.dense.maps import orientation_coordinates
+    from darcyan.dense.landmarks import orientation_coordinates
     from darcyan.geometry.operators import face_gradients
     from darcyan.geometry.shape import prepare_shape
 
@@ -308,7 +303,7 @@ def test_orientation_coordinates_on_a_plane_are_the_sine_between_the_landmark_di
     # On a plane the distance to a point grows along the direction away from it, so the turn from
     # landmark a's gradient to landmark b's about the normal is sin of the angle between x - a and
     # x - b: positive on one side of the line ab, negative on the other (analytic, not the code's).
-    from darcyan.dense.maps import orientation_coordinates
+    from darcyan.dense.landmarks import orientation_coordinates
 
     shape = _disc_shape()
     v = shape.mesh.vertices
@@ -328,7 +323,7 @@ def test_orientation_coordinates_on_a_plane_are_the_sine_between_the_landmark_di
 def test_turns_to_other_fields_on_a_plane_are_the_sine_from_the_landmark_direction():
     # The distance to a grows along (x - a) / |x - a|, the field y along (0, 1, 0): the turn from
     # the first to the second about the normal is the sine of the angle between them.
-    from darcyan.dense.maps import orientation_coordinates
+    from darcyan.dense.landmarks import orientation_coordinates
 
     shape = _disc_shape()
     v = shape.mesh.vertices
@@ -344,7 +339,7 @@ def test_turns_to_other_fields_on_a_plane_are_the_sine_from_the_landmark_directi
 
 
 def test_turns_to_other_fields_are_the_pairwise_turns_in_the_documented_columns(figure_poses):
-    from darcyan.dense.maps import orientation_coordinates
+    from darcyan.dense.landmarks import orientation_coordinates
     from darcyan.geometry.shape import prepare_shape
 
     shape = prepare_shape(figure_poses[0])
@@ -375,7 +370,7 @@ def _moved_and_mirrored_tip_fields(mesh, seed: int):
 
 
 def test_signature_turns_flip_in_a_mirror_stay_under_rigid_motion_and_scale_with_the_weight(figure_poses):
-    from darcyan.dense.maps import point_signature, signature_turn_coordinates
+    from darcyan.dense.signatures import point_signature, signature_turn_coordinates
 
     turns = {}
     for name, shape, fields in _moved_and_mirrored_tip_fields(figure_poses[0], seed=4):
@@ -393,7 +388,7 @@ def test_signature_turns_flip_in_a_mirror_stay_under_rigid_motion_and_scale_with
 
 
 def test_orientation_coordinates_flip_in_a_mirror_and_stay_under_rigid_motion(figure_poses):
-    from darcyan.dense.maps import orientation_coordinates
+    from darcyan.dense.landmarks import orientation_coordinates
 
     turns = {name: orientation_coordinates(shape, fields)
              for name, shape, fields in _moved_and_mirrored_tip_fields(figure_poses[0], seed=3)}
@@ -474,7 +469,7 @@ def test_a_mirrored_seed_is_replaced_by_the_alternative_that_keeps_the_body(faus
 def test_merged_zoomout_terms_measure_the_same_distances():
     # The bijectivity and orthogonality terms share one block of columns and one extra column:
     # squared distances between the embeddings must equal the sum of the four terms.
-    from darcyan.dense.maps import map_embeddings
+    from darcyan.dense.zoomout import map_embeddings
 
     rng = np.random.default_rng(0)
     b_a, b_b = rng.normal(size=(40, 12)), rng.normal(size=(50, 12))
@@ -494,7 +489,7 @@ def test_merged_zoomout_terms_measure_the_same_distances():
 
 def test_rectangular_zoomout_terms_measure_the_same_distances():
     # With a margin the maps are (p, k): each term compares the columns the docstring names.
-    from darcyan.dense.maps import map_embeddings
+    from darcyan.dense.zoomout import map_embeddings
 
     rng = np.random.default_rng(1)
     p, k = 15, 12
@@ -521,7 +516,7 @@ def test_zoomout_with_a_margin_keeps_the_true_map_of_a_renumbered_copy(figure_po
     # mismatched columns would not (the columns of the other terms: the test above). The
     # commutativity term costs nothing there (the copy's eigenvalues are the shape's, and the true
     # map pairs each eigenfunction with its own), so it must not move the map either.
-    from darcyan.dense.maps import read_out_map, zoomout
+    from darcyan.dense.zoomout import read_out_map, zoomout
     from darcyan.geometry.shape import prepare_shape
 
     mesh = figure_poses[0]
@@ -541,7 +536,7 @@ def test_zoomout_with_a_margin_keeps_the_true_map_of_a_renumbered_copy(figure_po
 
 
 def test_commutativity_shrinks_by_the_squared_relative_gap_of_the_eigenvalues():
-    from darcyan.dense.maps import commutativity_shrinkage
+    from darcyan.dense.zoomout import commutativity_shrinkage
 
     a, b = np.array([0.0, 1.0, 2.0, 5.0]), np.array([0.0, 1.0, 4.0])
     factor = commutativity_shrinkage(a, b, 4, 3, 2.0)
@@ -562,7 +557,7 @@ def test_commutativity_shrinks_by_the_squared_relative_gap_of_the_eigenvalues():
 def test_zoomout_shrinks_each_direction_by_its_own_eigenvalues():
     # One step (basis_start == basis_size) returns the fits of the given maps: each shrunk with the
     # eigenvalues of the shape it maps from as rows and of the other as columns.
-    from darcyan.dense.maps import _Fitter, commutativity_shrinkage, zoomout
+    from darcyan.dense.zoomout import _Fitter, commutativity_shrinkage, zoomout
 
     rng = np.random.default_rng(5)
     b_1, b_2 = rng.normal(size=(60, 14)), rng.normal(size=(50, 14))
@@ -580,14 +575,15 @@ def test_zoomout_shrinks_each_direction_by_its_own_eigenvalues():
 
 @pytest.mark.slow
 def test_the_dense_map_shrinks_its_fits_with_both_shapes_eigenvalues(figure_pair, monkeypatch):
-    import darcyan.dense.maps as maps
+    import darcyan.dense.zoomout as zoomout_module
 
     seen = []
-    real = maps.commutativity_shrinkage
-    monkeypatch.setattr(maps, "commutativity_shrinkage", lambda *a: seen.append(a[:2]) or real(*a))
+    real = zoomout_module.commutativity_shrinkage
+    monkeypatch.setattr(zoomout_module, "commutativity_shrinkage", lambda *a: seen.append(a[:2]) or real(*a))
     shape_1, shape_2, matches = figure_pair
     dense_map(shape_1, shape_2, matches, FAST)
-    want_1, want_2 = maps.dense_eigenvalues(shape_1.shape, FAST), maps.dense_eigenvalues(shape_2.shape, FAST)
+    want_1 = zoomout_module.dense_eigenvalues(shape_1.shape, FAST)
+    want_2 = zoomout_module.dense_eigenvalues(shape_2.shape, FAST)
     assert seen and all(a is want_1 and b is want_2 or a is want_2 and b is want_1 for a, b in seen)
     seen.clear()
     dense_map(shape_1, shape_2, matches, dataclasses.replace(FAST, commutativity=0.0))
@@ -597,7 +593,7 @@ def test_the_dense_map_shrinks_its_fits_with_both_shapes_eigenvalues(figure_pair
 def test_a_shrunk_fit_minimizes_the_commutativity_term_on_an_orthonormal_sample_basis():
     # The documented claim: with B^T B = s I, the shrunk least-squares map is the exact minimizer
     # of |B C - Y|^2 + s w sum(r_ij^2 C_ij^2), here solved column by column as stacked least squares.
-    from darcyan.dense.maps import _Fitter, commutativity_shrinkage
+    from darcyan.dense.zoomout import _Fitter, commutativity_shrinkage
 
     rng = np.random.default_rng(3)
     s = 50
@@ -639,7 +635,7 @@ def test_dense_config_rejects_bad_seed_settings():
 
 
 def test_functional_map_fits_equal_least_squares_with_fewer_samples_than_columns_too():
-    from darcyan.dense.maps import _Fitter
+    from darcyan.dense.zoomout import _Fitter
 
     rng = np.random.default_rng(2)
     for samples in (40, 6):  # QR once; fewer samples than columns: least squares each time
@@ -651,7 +647,7 @@ def test_functional_map_fits_equal_least_squares_with_fewer_samples_than_columns
 
 
 def test_landmark_coordinates_follow_the_vertices_of_a_moved_and_renumbered_copy(figure_poses):
-    from darcyan.dense.maps import landmark_coordinates
+    from darcyan.dense.landmarks import landmark_coordinates
     from darcyan.geometry.shape import prepare_shape
 
     mesh = figure_poses[0]
@@ -705,7 +701,7 @@ def test_coarse_coordinates_steer_only_the_zoomout_steps_up_to_signature_until(f
     # A renumbered copy: the true map is known. ZoomOut from a random first map cannot find it
     # with 20 eigenfunctions alone; coordinates that correspond (here the positions), in the
     # coarse steps, lead it there; and steps above signature_until ignore them exactly.
-    from darcyan.dense.maps import map_embeddings, zoomout
+    from darcyan.dense.zoomout import map_embeddings, zoomout
     from darcyan.geometry.knn import nearest_rows
     from darcyan.geometry.shape import prepare_shape
 
@@ -737,7 +733,7 @@ def test_coarse_coordinates_steer_only_the_zoomout_steps_up_to_signature_until(f
 def test_the_final_read_out_carries_the_steady_coordinates(figure_poses):
     # A renumbered copy, functional maps that say nothing (zero): coordinates that correspond (the
     # positions, scaled to dominate) give the true map exactly; without them the map is not it.
-    from darcyan.dense.maps import read_out_map
+    from darcyan.dense.zoomout import read_out_map
     from darcyan.geometry.shape import prepare_shape
 
     mesh = figure_poses[0]
@@ -755,7 +751,7 @@ def test_the_final_read_out_carries_the_steady_coordinates(figure_poses):
 
 
 def test_signature_coordinates_have_the_configured_spread(figure_poses):
-    from darcyan.dense.maps import point_signature, signature_coordinates
+    from darcyan.dense.signatures import point_signature, signature_coordinates
     from darcyan.geometry.shape import prepare_shape
 
     shape_1, shape_2 = (prepare_shape(mesh) for mesh in figure_poses[:2])
@@ -773,7 +769,7 @@ def test_signature_coordinates_have_the_configured_spread(figure_poses):
 
 
 def test_consensus_map_keeps_the_image_two_of_three_maps_agree_on():
-    from darcyan.dense.maps import consensus_map
+    from darcyan.dense.zoomout import consensus_map
 
     # Points of a helix (no two equidistant from a third by accident); the true map is the identity.
     t = np.linspace(0, 6 * np.pi, 300)
@@ -793,7 +789,7 @@ def test_consensus_map_keeps_the_image_two_of_three_maps_agree_on():
 
 
 def test_ensemble_members_draw_seeded_samples_of_their_own(figure_poses):
-    from darcyan.dense.maps import zoomout_sample
+    from darcyan.dense.zoomout import zoomout_sample
     from darcyan.geometry.shape import prepare_shape
 
     shape = prepare_shape(figure_poses[0])
@@ -868,7 +864,7 @@ def test_cli_farthest_sampling_maps_a_renumbered_file_alike(small_pose_files, tm
 
 
 def test_farthest_seed_points_are_spread_when_zoomout_runs_on_every_vertex(figure_poses):
-    from darcyan.dense.maps import seed_subset, zoomout_samples
+    from darcyan.dense.zoomout import seed_subset, zoomout_samples
     from darcyan.geometry.sampling import farthest_point_vertices
     from darcyan.geometry.shape import prepare_shape
 
@@ -887,7 +883,7 @@ def test_a_verification_is_kept_per_pair_of_files_and_settings(small_pose_files,
     """The outcome read back from the cache is the one computed (seed, scores, the matching of
     that seed); other files, preparation, matchings or dense settings are verified anew."""
     import darcyan.dense.verify as verify_module
-    from darcyan.dense.maps import matching_of_seed
+    from darcyan.dense.seeds import matching_of_seed
     from darcyan.io.cache import ShapeCache
     from darcyan.method.pipeline import describe_shapes, load_shape
 
@@ -932,7 +928,7 @@ def test_a_verification_is_kept_per_pair_of_files_and_settings(small_pose_files,
 
 
 def test_the_matching_of_a_seed_keeps_the_others_as_alternatives():
-    from darcyan.dense.maps import matching_of_seed
+    from darcyan.dense.seeds import matching_of_seed
 
     others = tuple(tip_correspondence([i], [i + 1]) for i in range(3))
     sparse = dataclasses.replace(tip_correspondence([9], [9]), alternatives=others)

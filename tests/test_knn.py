@@ -48,7 +48,7 @@ def test_nearest_rows_near_equals_the_full_search_on_a_smooth_surface_embedding(
     # Rows: a smooth embedding of the sphere's vertices (position and a few smooth functions of
     # it, like a dense map's coordinates); queries: the embedding at random points of the sphere.
     # Searched near their nearest sample only, they must find the rows a full search finds.
-    from darcyan.dense.maps import DenseConfig
+    from darcyan.dense.config import DenseConfig
     from darcyan.geometry.knn import nearest_rows_near
 
     rng = np.random.default_rng(1)

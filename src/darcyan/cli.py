@@ -128,7 +128,7 @@ def cmd_match(args: argparse.Namespace) -> int:
         if value is not None and not args.dense:
             raise DarcyanError(f"{option} applies to --dense maps only")
     if args.dense:
-        from .dense.maps import DenseConfig
+        from .dense.config import DenseConfig
 
         try:
             dense_config = DenseConfig() if args.ensemble is None else DenseConfig(ensemble=args.ensemble)
@@ -168,7 +168,8 @@ def cmd_match(args: argparse.Namespace) -> int:
         # A matching in doubt is verified, unless --no-verify or a dense map makes the same choice.
         verify = args.verify or (correspondence.in_doubt and not args.no_verify and not args.dense)
         if verify:
-            from .dense.maps import DENSE_FAILURES, DenseConfig
+            from .dense.config import DenseConfig
+            from .dense.maps import DENSE_FAILURES
             from .dense.verify import verified_file_matches
 
             why = "" if args.verify else (f" (in doubt: the orientation test's margin {correspondence.margin:.2f} "

@@ -520,7 +520,8 @@ def _verified(job: dict, target: Shape, correspondence) -> tuple:
     (:func:`darcyan.dense.verify.verified_file_matches`: kept in the run's cache): the matching
     and what the record says of it (``verified``: the seed's rank, 0 for the sparse matching;
     ``verify_failed`` when it could not be verified, the matching kept)."""
-    from ..dense.maps import DENSE_FAILURES, DenseConfig
+    from ..dense.config import DenseConfig
+    from ..dense.maps import DENSE_FAILURES
     from ..dense.verify import verified_file_matches
 
     settings: BenchSettings = job["settings"]
@@ -570,7 +571,8 @@ def _seed_score(job: dict, target: Shape, correspondence, seed: int) -> dict:
 
 def _dense_records(job: dict, target: Shape) -> list:
     """The dense maps of one pair (``job["dense_methods"]``), scored on the same sampled vertices."""
-    from ..dense.maps import DENSE_FAILURES, UNMAPPED, DenseConfig, dense_map, pyfm_own_map
+    from ..dense.config import DenseConfig
+    from ..dense.maps import DENSE_FAILURES, UNMAPPED, dense_map, pyfm_own_map
     from ..eval.dense_scores import evaluate_dense_maps
     from ..eval.metrics import GroundTruth
     from ..method.pipeline import match_shapes

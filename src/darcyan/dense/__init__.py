@@ -2,17 +2,10 @@
 :func:`verified_matches` (the seed a dense map would choose, as sparse matches) and
 :func:`seed_scores` (the scores it chooses by)."""
 
-from .maps import (
-    UNMAPPED,
-    DenseConfig,
-    DenseMap,
-    consistent_landmarks,
-    dense_map,
-    dense_map_to_csv,
-    pyfm_own_map,
-    seed_scores,
-    verified_matches,
-)
+from .config import DenseConfig
+from .landmarks import consistent_landmarks
+from .maps import UNMAPPED, DenseMap, dense_map, dense_map_to_csv, pyfm_own_map
+from .seeds import seed_scores, verified_matches
 
 __all__ = ["UNMAPPED", "DenseConfig", "DenseMap", "consistent_landmarks", "dense_map", "dense_map_to_csv",
            "pyfm_own_map", "seed_scores", "verified_matches"]

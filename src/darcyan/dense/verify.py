@@ -1,6 +1,6 @@
 """Verifying a matching in doubt, once per pair of files: :func:`verified_file_matches`.
 
-The verification (:func:`darcyan.dense.maps.verified_matches`) prepares both shapes and runs a
+The verification (:func:`darcyan.dense.seeds.verified_matches`) prepares both shapes and runs a
 short ZoomOut per candidate matching: seconds on large meshes, against a tenth of a second for a
 match from cached descriptions. Its outcome (which seed, the seeds' scores) depends only on the
 two files' contents, how they are prepared, the matchings weighed, the dense settings and
@@ -21,14 +21,15 @@ import numpy as np
 
 from ..config import DarcyanConfig
 from ..io.cache import ShapeCache, code_digest, file_digest
-from .maps import DenseConfig, matching_of_seed, seed_check, verified_matches
+from .config import DenseConfig
+from .seeds import matching_of_seed, seed_check, verified_matches
 
 
 def verified_file_matches(source: str | os.PathLike, target: str | os.PathLike, correspondence,
                           shapes: Callable[[], tuple], config: DarcyanConfig = DarcyanConfig(),
                           dense_config: DenseConfig = DenseConfig(), repair: bool = False,
                           cache: ShapeCache | None = None, full_basis: bool = False) -> tuple:
-    """:func:`~darcyan.dense.maps.verified_matches` of the files ``source`` and ``target``,
+    """:func:`~darcyan.dense.seeds.verified_matches` of the files ``source`` and ``target``,
     whose ``correspondence`` was matched with ``config`` (and ``repair``); ``shapes()`` gives
     their two prepared shapes, called only when the outcome is not in ``cache``; ``full_basis``
     as ``verified_matches`` takes it.
@@ -72,7 +73,7 @@ def _matchings_digest(correspondence, candidates: int) -> str:
 
 
 def _about_from_arrays(stored: dict | None, correspondence, margin: float) -> dict | None:
-    """The outcome kept in a cache entry (:func:`~darcyan.dense.maps.seed_check` of it);
+    """The outcome kept in a cache entry (:func:`~darcyan.dense.seeds.seed_check` of it);
     ``None`` when there is none or it does not fit ``correspondence`` (then the pair is verified
     anew)."""
     if stored is None or not {"seed", "ranks", "scores"} <= stored.keys():

@@ -1,0 +1,209 @@
+"""The seed of a dense map: which matching (the sparse one or an alternative) it starts from.
+
+The sparse matching competes with the alternatives the sparse stage weighed
+(``Correspondence.alternatives``): each is turned into landmarks (:func:`landmark_set`) and
+seeds a short ZoomOut, and the one whose map best keeps the curvature signature
+(:func:`~darcyan.dense.signatures.point_signature`) seeds the dense map. A mirrored seed keeps
+every distance and, with the orientation coordinates, turns the body round, front onto back,
+which the curvature of a face or a chest shows. :func:`verified_matches` gives that choice as
+sparse matches, :func:`seed_scores` the scores it is made by.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import DarcyanError
+from ..geometry.knn import nearest_rows
+from .config import DenseConfig
+from .landmarks import MIN_LANDMARKS, landmark_set
+from .signatures import point_signature
+from .zoomout import dense_basis, map_embeddings, seed_subset, zoomout, zoomout_samples
+
+
+def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig(),
+                     full_basis: bool = False):
+    """The matching a dense map would be seeded by: ``correspondence`` itself, or the alternative
+    (``correspondence.alternatives``) whose short ZoomOut map keeps the curvature signature
+    clearly better (see :class:`DenseConfig`: ``candidates``, ``seed_margin``). Scored on a
+    spectrum of the short ZoomOuts' size (:func:`seed_scoring_config`), where :func:`dense_map`
+    scores on its full basis: the same seed on every pair compared (``docs/parameters.md``), not
+    by construction. Costs the two shapes' 30 first eigenfunctions and a short ZoomOut per
+    candidate (choosing the seed of a 5k pair: 0.45 s, against 1.34 s on the full basis).
+    ``full_basis``: score on the dense map's full basis instead, exactly as :func:`dense_map`
+    does (when a dense map follows, which then reuses that basis).
+
+    Returns ``(matches, about)``: a correspondence of the same kind as ``correspondence`` (its
+    ``alternatives`` the others, the sparse matching first among them), and what
+    :attr:`DenseMap.check` says of seeds (``seed``, ``signatures``, ``clear``: no other
+    candidate within the margin).
+
+    Raises:
+        DarcyanError: when no candidate has :data:`MIN_LANDMARKS` consistent matches.
+    """
+    shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
+    scoring = config if full_basis else seed_scoring_config(config)
+    seed, seeds, _, _ = choose_seed(shape_1, shape_2, correspondence, scoring, lambda stage: None, {})
+    return matching_of_seed(correspondence, seed.rank), check_of_seeds(seed, seeds, config.seed_margin)
+
+
+def seed_scoring_config(config: DenseConfig) -> DenseConfig:
+    """``config`` with the basis cut to what scoring the seeds uses (``seed_basis``
+    eigenfunctions, no margin): without a dense map to follow, a spectrum of that size is enough
+    (choosing the seed of a 5k pair takes a third of the time). Its vectors are those of the full spectrum's first columns
+    up to sign (which the short ZoomOuts' maps do not depend on), but for the last few, mixed
+    with their neighbours beyond the cut: the seeds' scores move by up to 0.4% on the 5k sets'
+    300 test pairs and 1.2% on 7 tosca-hires pairs, and the chosen seed is the same on all of
+    them (``docs/parameters.md``)."""
+    short = min(config.seed_basis, config.basis_size)
+    return dataclasses.replace(config, basis_size=short, basis_start=min(config.basis_start, short), basis_margin=0)
+
+
+def matching_of_seed(correspondence, rank: int):
+    """The matching of seed ``rank`` (0: ``correspondence`` itself; 1, 2, ...: its
+    ``alternatives``), the others (the sparse matching first) as its alternatives."""
+    matchings = [correspondence] + list(getattr(correspondence, "alternatives", ()))
+    if not 0 <= rank < len(matchings):
+        raise DarcyanError(f"seed {rank}: the matching has {len(matchings) - 1} alternatives")
+    chosen = matchings[rank]
+    if rank > 0:
+        chosen = dataclasses.replace(chosen, alternatives=tuple(m for m in matchings if m is not chosen))
+    return chosen
+
+
+def seed_scores(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig()) -> dict:
+    """``{rank: score}``: the signature score of each usable seed (0: ``correspondence`` itself,
+    1, 2, ...: its alternatives), lower is better; the scores :func:`dense_map` chooses its seed
+    by (see :func:`chosen_seed`), without making the map. Raises DarcyanError like it."""
+    return verified_matches(shape_1, shape_2, correspondence, config, full_basis=True)[1]["signatures"]
+
+
+def seed_check(rank: int, signatures: dict, margin: float) -> dict:
+    """What :attr:`DenseMap.check` says of the seeds, from the chosen seed's ``rank`` and every
+    usable seed's score (``signatures``: rank -> score): ``clear`` when no other seed scores
+    within ``margin`` (relative) of it."""
+    others = sorted(score for r, score in signatures.items() if r != rank)
+    return {"seed": rank, "seeds": len(signatures), "signature": signatures[rank],
+            "runner_up": others[0] if others else None, "signatures": dict(signatures),
+            "clear": bool(not others or signatures[rank] <= (1.0 - margin) * others[0])}
+
+
+def check_of_seeds(seed, seeds: list, margin: float) -> dict:
+    return seed_check(seed.rank, {s.rank: s.signature for s in seeds}, margin)
+
+
+def choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, timings: dict) -> tuple:
+    """``(seed, seeds, samples, bases)``: the ZoomOut samples and bases of both shapes, the
+    usable seeds and the one chosen (see :func:`_chosen_seed`)."""
+    for shape in (shape_1, shape_2):
+        if not hasattr(shape, "mesh_index"):
+            raise DarcyanError(f"{shape.name}: a dense map works on prepared shapes, not on a description "
+                               f"(darcyan.load_shape(path) or darcyan.prepare_shape(mesh) gives one)")
+    t = time.perf_counter()
+    samples = zoomout_samples(shape_1, shape_2, config)
+    bases = (None, None)
+    if config.method == "zoomout" or config.candidates > 1:
+        say("basis")
+        bases = dense_basis(shape_1, config), dense_basis(shape_2, config)
+    timings["basis"] = time.perf_counter() - t
+    t = time.perf_counter()
+    say("landmarks")
+    seeds = _seeds(shape_1, shape_2, correspondence, config, samples, bases)
+    if not seeds:
+        raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: fewer than {MIN_LANDMARKS} consistent landmark "
+                           f"matches, a dense map needs at least {MIN_LANDMARKS}")
+    timings["landmarks"] = time.perf_counter() - t
+    return _chosen_seed(seeds, config.seed_margin), seeds, samples, bases
+
+
+@dataclass(frozen=True)
+class Seed:
+    """One candidate matching turned into landmarks and their coordinates on both shapes
+    (``(n, c)``), with the mean difference of the point signatures between source points and
+    their images under a short ZoomOut from it (``signature``, lower is better; 0 when the
+    matching has no alternatives)."""
+
+    rank: int
+    source: np.ndarray
+    target: np.ndarray
+    fields_1: np.ndarray
+    fields_2: np.ndarray
+    turns_1: np.ndarray
+    turns_2: np.ndarray
+    coords_1: np.ndarray
+    coords_2: np.ndarray
+    signature: float
+
+
+def _chosen_seed(seeds: list, margin: float) -> Seed:
+    """The seed :func:`chosen_seed` picks by the seeds' signature scores."""
+    return seeds[chosen_seed([s.signature for s in seeds], margin)]
+
+
+def chosen_seed(scores: list, margin: float) -> int:
+    """Index of the seed that seeds the map, given each usable seed's signature score (the
+    sparse matching's first, when usable): the lowest score, unless it beats the first by less
+    than ``margin`` (relative): then the first."""
+    best = min(range(len(scores)), key=lambda i: scores[i])
+    return best if scores[best] < (1.0 - margin) * scores[0] else 0
+
+
+def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple, bases: tuple) -> list:
+    """The usable seeds among the correspondence and its first ``config.candidates - 1``
+    alternatives (``correspondence.alternatives``, the other matchings the sparse stage
+    weighed). With several, each seeds a short ZoomOut (``config.seed_basis`` eigenfunctions,
+    ``config.seed_samples`` of the samples) scored by how well its map keeps the shapes'
+    :func:`point_signature`: a seed of mirrored landmarks yields a map that keeps their
+    orientation only by turning the body round (front onto back), which no landmark coordinate
+    sees and the curvature of a face or a chest does. A matching whose consistent landmarks are
+    those of an earlier one is left out."""
+    matchings = [correspondence] + list(getattr(correspondence, "alternatives", ()))[:max(config.candidates - 1, 0)]
+    fields = ({}, {})
+    seeds = []
+    seen = set()
+    scoring = None
+    for rank, matching in enumerate(matchings):
+        landmarks = landmark_set(shape_1, shape_2, matching, config, fields)
+        if landmarks is None:
+            continue
+        # Matchings that differ only in matches the consistency test drops are one seed (the
+        # same map): counted twice, a seed would be its own runner-up and never "clear".
+        pairs = tuple(sorted(zip(landmarks[0].tolist(), landmarks[1].tolist())))
+        if pairs in seen:
+            continue
+        seen.add(pairs)
+        coords_1, coords_2 = landmarks[-2:]
+        score = 0.0
+        if len(matchings) > 1:
+            if scoring is None:
+                scoring = _SeedScoring(shape_1, shape_2, config, samples, bases)
+            score = scoring.score(coords_1, coords_2)
+        seeds.append(Seed(rank, *landmarks, score))
+    return seeds
+
+
+class _SeedScoring:
+    """What scoring a seed needs, built once per pair: ``seed_samples`` of the ZoomOut samples
+    (:func:`seed_subset`), the bases there and the point signatures."""
+
+    def __init__(self, shape_1, shape_2, config: DenseConfig, samples: tuple, bases: tuple):
+        size = min(config.seed_basis, config.basis_size)
+        self.config = dataclasses.replace(config, basis_size=size, basis_start=min(config.basis_start, size),
+                                          basis_margin=0)
+        self.points = []
+        for shape, sample in zip((shape_1, shape_2), samples):
+            self.points.append(seed_subset(shape, sample, config.seed_samples, config))
+        self.bases = [basis[points, :self.config.basis_size] for basis, points in zip(bases, self.points)]
+        self.signatures = [point_signature(shape, config)[points] for shape, points in zip((shape_1, shape_2),
+                                                                                          self.points)]
+
+    def score(self, coords_1: np.ndarray, coords_2: np.ndarray) -> float:
+        (p_1, p_2), (b_1, b_2) = self.points, self.bases
+        f_1, f_2 = coords_1[p_1], coords_2[p_2]
+        c_12, c_21 = zoomout(b_1, b_2, nearest_rows(f_2, f_1), nearest_rows(f_1, f_2), self.config, f_1, f_2)
+        q, r = map_embeddings(b_1, b_2, c_12, c_21, self.config, f_1, f_2)
+        return float(np.abs(self.signatures[0] - self.signatures[1][nearest_rows(r, q)]).mean())

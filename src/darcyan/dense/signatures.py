@@ -1,0 +1,64 @@
+"""The curvature signature that a dense map keeps: which way a body is turned.
+
+Distances to a few extremities cannot tell a body's front from its back; the mean curvature
+diffused over a few lengths (:func:`point_signature`) can, and survives a change of pose. It
+scores the seeds (:mod:`darcyan.dense.seeds`), joins ZoomOut's coarse steps
+(:func:`signature_coordinates`), and, turned against the directions to the landmarks, every
+step (:func:`signature_turn_coordinates`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .config import DenseConfig
+from .landmarks import orientation_coordinates
+
+
+def point_signature(shape, config: DenseConfig) -> np.ndarray:
+    """``(n, len(config.signature_lengths))`` the shape's mean curvature diffused over each of
+    ``config.signature_lengths`` (:func:`darcyan.method.symmetry.curvature_signature`: intrinsic
+    enough to survive a change of pose, different on the front and the back of a body), on the
+    coarse proxy of a large mesh."""
+    from ..config import DarcyanConfig
+    from ..method.symmetry import shape_signature
+
+    describe = DarcyanConfig()  # the describe stage's curvature smoothing and diffusion steps
+
+    def compute():
+        proxy = shape.proxy(config.basis_proxy_vertices) if config.basis_proxy_vertices > 0 else None
+        return shape_signature(shape, proxy, config.signature_lengths, describe.heat.diffusion_steps,
+                               describe.curvature_smoothing)
+
+    # once per shape: --verify and the dense map, or several dense variants, score seeds alike
+    return shape.derived(("point signature", config.signature_lengths, config.basis_proxy_vertices), compute)
+
+
+def signature_coordinates(shape_1, shape_2, config: DenseConfig, sample_1: np.ndarray,
+                          sample_2: np.ndarray) -> tuple:
+    """``(coarse_1 (s_1, c), coarse_2 (s_2, c))``: the :func:`point_signature` at the samples,
+    each length divided by its standard deviation over both shapes' vertices and weighed by
+    ``config.signature_weight`` (``(None, None)`` at weight 0): the coordinates that join the
+    coarse ZoomOut steps (:func:`zoomout`)."""
+    if config.signature_weight <= 0:
+        return None, None
+    s_1, s_2 = point_signature(shape_1, config), point_signature(shape_2, config)
+    scale = np.concatenate([s_1, s_2]).std(axis=0)
+    scale[scale == 0] = 1.0  # a constant signature (a sphere) tells nothing: left as it is
+    weight = config.signature_weight / scale
+    return weight * s_1[sample_1], weight * s_2[sample_2]
+
+
+def signature_turn_coordinates(shape_1, shape_2, config: DenseConfig, fields_1: np.ndarray,
+                               fields_2: np.ndarray) -> tuple:
+    """``(turns_1 (n1, k l), turns_2 (n2, k l))``: at every vertex, the sine of the turn from the
+    gradient of the distance to each of the k landmarks (``fields_i (n_i, k)``) to the gradient
+    of each of the l lengths of the :func:`point_signature`, about the outward normal
+    (:func:`orientation_coordinates`), times ``config.signature_turns`` (``(None, None)`` at
+    weight 0). An isometry keeps them and a reflection flips them, like the turns between
+    landmarks; unlike those, they do not vanish along a limb, where the directions to all the
+    landmarks run along it and only the curvature tells one side of it from another."""
+    if config.signature_turns <= 0:
+        return None, None
+    return tuple(config.signature_turns * orientation_coordinates(shape, fields, point_signature(shape, config))
+                 for shape, fields in ((shape_1, fields_1), (shape_2, fields_2)))

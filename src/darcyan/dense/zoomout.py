@@ -1,0 +1,279 @@
+"""Bijective ZoomOut on a Laplace-Beltrami basis: the refinement of a dense map.
+
+ZoomOut (Melzi et al., *ZoomOut: Spectral Upsampling for Efficient Shape Correspondence*, 2019)
+alternates between functional maps fitted to the current vertex maps and vertex maps read from
+the functional maps by nearest neighbours, growing the basis each step; here with the
+bijectivity and orthogonality terms of Ren et al. (*Discrete Optimization for Shape Matching*,
+2021), a Laplacian commutativity term in the fits and other coordinates beside the spectral ones
+(:func:`map_embeddings`). It iterates on random surface samples (:func:`zoomout_samples`); the
+final map is read out for every source vertex (:func:`read_out_map`). The basis: cotangent
+stiffness, mixed Voronoi mass, ``scipy.sparse.linalg.eigsh`` (:func:`dense_spectrum`; on a
+decimated proxy of a large mesh, interpolated).
+
+Memory stays O(V): the functional maps are (k + margin) x k, nearest neighbours are searched
+with a k-d tree (few dimensions) or by blocks of source rows (spectral dimensions), and on a
+large target near each image's nearest ZoomOut sample
+(:func:`darcyan.geometry.knn.nearest_rows_near`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..geometry.knn import nearest_rows, nearest_rows_near
+from ..geometry.sampling import farthest_point_vertices, sample_vertices
+from .config import DenseConfig
+
+# Shift of the shift-invert eigen solver (just below the zero eigenvalue of the Laplacian).
+EIGSH_SHIFT = -1e-8
+# Eigenvalues below this share of the largest are the constant functions' 0 (rounding aside).
+ZERO_EIGENVALUE = 1e-9
+
+
+# ----------------------------------------------------------------------------------------------
+# Samples and basis
+
+
+def zoomout_sample(shape, config: DenseConfig, member: int = 0) -> np.ndarray:
+    """``(zoomout_samples,)`` the vertices ZoomOut iterates on, in their order of priority (the
+    seeds' short ZoomOuts take a spread subset, :func:`seed_subset`). The first ZoomOut's, with
+    ``config.sampling`` ``"farthest"``: in farthest-point order
+    (:func:`~darcyan.geometry.sampling.farthest_point_vertices`) from the vertex farthest from
+    the area centroid (the origin of the prepared mesh). Otherwise (``"random"``, or another member of the ensemble,
+    ``config.ensemble``, which needs samples of its own): drawn by area with seed ``config.seed``
+    (``(config.seed, member)`` for the other members), sorted."""
+    if config.sampling == "random" or member > 0:
+        rng = np.random.default_rng(config.seed if member == 0 else (config.seed, member))
+        return np.sort(sample_vertices(shape.mesh.n_vertices, config.zoomout_samples, rng, shape.vertex_areas))
+
+    def farthest():
+        positions = shape.mesh.vertices  # centred on the area centroid by the preparation
+        start = int(np.argmax((positions**2).sum(axis=1)))
+        return farthest_point_vertices(positions, config.zoomout_samples, start)
+
+    return shape.derived(("zoomout_sample", config.zoomout_samples), farthest)
+
+
+def seed_subset(shape, sample: np.ndarray, count: int, config: DenseConfig) -> np.ndarray:
+    """``(min(count, s),)`` vertices of ``shape`` that the seeds' short ZoomOuts run on, given its
+    ZoomOut sample ``(s,)``: of a sorted random sample, every so many; of a farthest-point sample,
+    its first ``count`` (a farthest-point sample of its own), and, when ZoomOut runs on every
+    vertex, ``count`` farthest points of the shape."""
+    count = min(count, len(sample))
+    if config.sampling == "random":
+        return sample[np.linspace(0, len(sample) - 1, count).astype(np.int64)]
+    if len(sample) == shape.mesh.n_vertices:  # every vertex, in index order: not spread
+        return zoomout_sample(shape, dataclasses.replace(config, zoomout_samples=count))
+    return sample[:count]
+
+
+def zoomout_samples(shape_1, shape_2, config: DenseConfig, member: int = 0) -> tuple:
+    """``(sample_1, sample_2)``: both shapes' :func:`zoomout_sample` for ``member``, or every vertex
+    of both when ``config.zoomout_samples`` is 0 or covers the larger mesh."""
+    if 0 < config.zoomout_samples < max(shape_1.mesh.n_vertices, shape_2.mesh.n_vertices):
+        return zoomout_sample(shape_1, config, member), zoomout_sample(shape_2, config, member)
+    return np.arange(shape_1.mesh.n_vertices), np.arange(shape_2.mesh.n_vertices)
+
+
+def fit_width(k: int, config: DenseConfig, columns: int | None = None) -> int:
+    """How many eigenfunctions of the shape a functional map of size k maps from: k +
+    ``config.basis_margin`` from the size ``config.margin_from`` on, else k (at most ``columns``,
+    the bases' columns, when given)."""
+    p = k + config.basis_margin if k >= config.margin_from else k
+    return p if columns is None else min(p, columns)
+
+
+def dense_spectrum(shape, config: DenseConfig):
+    """The shape's ``fit_width(basis_size)`` first Laplace-Beltrami eigenpairs (a
+    :class:`~darcyan.geometry.spectral.Spectrum`, built once per shape; on the coarse proxy of a
+    large mesh, see ``DenseConfig.basis_proxy_vertices``)."""
+    size = fit_width(config.basis_size, config)
+    return shape.smooth_spectrum(min(size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
+                                 tol=config.basis_tolerance, shift=EIGSH_SHIFT)
+
+
+def dense_basis(shape, config: DenseConfig) -> np.ndarray:
+    """``(n, fit_width(basis_size))`` the eigenvectors of :func:`dense_spectrum`."""
+    return dense_spectrum(shape, config).vectors
+
+
+def dense_eigenvalues(shape, config: DenseConfig) -> np.ndarray:
+    """``(fit_width(basis_size),)`` the eigenvalues of :func:`dense_spectrum` (ascending; the
+    coarse proxy's where the basis comes from it)."""
+    return dense_spectrum(shape, config).values
+
+
+# ----------------------------------------------------------------------------------------------
+# The iterations
+
+
+def commutativity_shrinkage(values_a: np.ndarray, values_b: np.ndarray, p: int, k: int, weight: float) -> np.ndarray:
+    """``(p, k)`` the factor ``1 / (1 + weight r_ij^2)``, ``r_ij = (l_i - l_j) / (l_i + l_j)``
+    (0 where both are 0), by which ZoomOut shrinks each entry ``C[i, j]`` of its least-squares
+    functional map from b's first k eigenfunctions (eigenvalues ``l_j`` of ``values_b``) to
+    a's first p (``l_i``). On samples of an orthonormal basis (``B^T B = s I``, which samples
+    drawn by area approach) this is the exact minimizer of the fit's squared residual plus the
+    Laplacian commutativity term ``s * weight * sum(r_ij^2 C_ij^2)``, at no cost beyond the
+    fit. The relative gap, not the absolute one: between two bodies of unlike proportions the
+    eigenvalues differ by a share, and an absolute penalty would leave the low frequencies free
+    and pin the high ones. Eigenvalues below ``ZERO_EIGENVALUE`` times the largest count as 0: the
+    constant functions' eigenvalue is 0 only up to rounding (0 on one shape, 2e-14 on another),
+    and its relative gap must not be read as 1."""
+    a, b = np.abs(values_a[:p]), np.abs(values_b[:k])
+    floor = ZERO_EIGENVALUE * max(a.max(initial=0.0), b.max(initial=0.0))
+    a, b = np.where(a > floor, a, 0.0)[:, None], np.where(b > floor, b, 0.0)[None, :]
+    total = a + b
+    relative = np.divide(a - b, total, out=np.zeros_like(total), where=total > 0)
+    return 1.0 / (1.0 + weight * relative**2)
+
+
+class _Fitter:
+    """Least-squares functional maps on the leading columns of one basis ``(s, K)``: its QR
+    factorization once, whose leading k columns factor the first k basis columns (and the
+    leading block of R's inverse inverts theirs), so that each ZoomOut step's fit
+    ``basis[:, :k] @ C ~ Y`` is two small products, not a new least squares."""
+
+    def __init__(self, basis: np.ndarray):
+        self.basis = basis
+        self.q = self.r_inverse = None
+        if basis.shape[0] >= basis.shape[1]:  # fewer samples than columns: least squares each time
+            self.q, r = np.linalg.qr(basis)
+            self.r_inverse = np.linalg.inv(r)
+
+    def fit(self, mapped: np.ndarray, p: int | None = None) -> np.ndarray:
+        """``(p, k)`` ``C`` with ``basis[:, :p] @ C ~ mapped`` (``mapped (s, k)``; ``p``, at most
+        the basis's columns, defaults to k)."""
+        p = mapped.shape[1] if p is None else p
+        if self.q is None:
+            return np.linalg.lstsq(self.basis[:, :p], mapped, rcond=None)[0]
+        return self.r_inverse[:p, :p] @ (self.q[:, :p].T @ mapped)
+
+
+def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.ndarray,
+                   config: "DenseConfig", f_a: np.ndarray | None = None, f_b: np.ndarray | None = None,
+                   g_a: np.ndarray | None = None, g_b: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Query rows on shape a and reference rows on shape b whose nearest neighbours give the map
+    a -> b minimizing coupling, bijectivity and orthogonality residuals (and, with ``f_a (s_a,
+    c)``, ``f_b (s_b, c)`` the landmark coordinates, their difference weighed by
+    ``config.landmark_weight``; with ``g_a (s_a, d)``, ``g_b (s_b, d)``, those coordinates as they
+    are): ``nearest_rows(references, queries)`` is the vertex map.
+
+    ``c_ab (p, k)`` (p >= k: see ``DenseConfig.basis_margin``) pulls b's first k coefficients
+    back to a's first p (``b_a[:, :p] C_ab ~ b_b[map, :k]``), ``c_ba (p, k)`` the reverse; the
+    bases ``b_a``, ``b_b`` have at least p columns. Coupling: ``b_b[j, :k] ~ b_a[i, :p] C_ab``;
+    bijectivity (the map b -> a undoes a -> b): ``b_b[j, :p] C_ba ~ b_a[i, :k]``; orthogonality
+    (area preservation, ``C C^T ~ I`` for a square map): ``b_b[j, :k] C_ab[:k]^T ~ b_a[i, :k]``,
+    on the square k x k block alone, leaving a's columns beyond k out of this term (a choice that
+    holds near isometry, where that block carries the map, not an exact condition).
+    """
+    p, k = c_ab.shape
+    queries, references = [b_a[:, :p] @ c_ab], [b_b[:, :k]]
+    w1, w2 = config.bijectivity ** 2, config.orthogonality ** 2
+    if w1 + w2 > 0:
+        # Both terms compare b_a[i] with a row of b: w1 |a - x_j|^2 + w2 |a - y_j|^2 equals
+        # (w1 + w2) |a - m_j|^2 + w1 w2 / (w1 + w2) |x_j - y_j|^2 with m_j their weighted mean:
+        # one block of k columns and one column carrying the j-only part, not two blocks.
+        x, y = b_b[:, :p] @ c_ba, b_b[:, :k] @ c_ab[:k].T
+        total = w1 + w2
+        queries += [np.sqrt(total) * b_a[:, :k], np.zeros((len(b_a), 1))]
+        references += [(w1 * x + w2 * y) / np.sqrt(total),
+                       np.sqrt(w1 * w2 / total) * np.linalg.norm(x - y, axis=1)[:, None]]
+    if config.landmark_weight > 0 and f_a is not None:
+        queries.append(config.landmark_weight * f_a)
+        references.append(config.landmark_weight * f_b)
+    if g_a is not None:
+        queries.append(g_a)
+        references.append(g_b)
+    return np.hstack(queries), np.hstack(references)
+
+
+def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21: np.ndarray,
+            config: "DenseConfig", fields_1: np.ndarray | None = None,
+            fields_2: np.ndarray | None = None, coarse_1: np.ndarray | None = None,
+            coarse_2: np.ndarray | None = None, steady_1: np.ndarray | None = None,
+            steady_2: np.ndarray | None = None, values_1: np.ndarray | None = None,
+            values_2: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Bijective ZoomOut on (sampled) vertices.
+
+    ``basis_i (s_i, K)``: Laplace-Beltrami eigenfunctions at the vertices taking part (K up to
+    ``config.basis_size + config.basis_margin``);
+    ``map_12 (s_1,)`` indices of rows of ``basis_2`` (the current map 1 -> 2) and ``map_21
+    (s_2,)`` the reverse. For k from ``config.basis_start`` to ``config.basis_size`` by
+    ``config.basis_step``: fit the functional maps of both directions to the current
+    vertex maps (least squares, each entry shrunk by :func:`commutativity_shrinkage` when the
+    eigenvalues are given), then update both vertex maps by nearest neighbours of the
+    embeddings of :func:`map_embeddings` (ZoomOut, Melzi et al. 2019, with the bijectivity and
+    orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*, 2021); each
+    map is :func:`fit_width` x k (rectangular from ``config.margin_from`` on). ``coarse_i (s_i,
+    c)``: coordinates that join the embeddings, as they are, in the steps of size at most
+    ``config.signature_until`` only (the weighted point signatures); ``steady_i (s_i, t)``:
+    coordinates that join them in every step (the weighted signature turns); ``values_i (K,)``:
+    the bases' eigenvalues, for the commutativity term of the fits (``config.commutativity``;
+    without them, plain least-squares fits).
+
+    Returns ``c_12, c_21`` (``(p, k)``: the last size k and its p columns, as above; see
+    :func:`map_embeddings`): ``basis_1[:, :p] @ c_12 ~ basis_2[map_12, :k]``.
+    """
+    largest = min(config.basis_size, basis_1.shape[1], basis_2.shape[1])
+    sizes = list(range(min(config.basis_start, largest), largest + 1, config.basis_step))
+    if sizes[-1] != largest:
+        sizes.append(largest)
+    columns = min(basis_1.shape[1], basis_2.shape[1])
+    widest = fit_width(largest, config, columns)
+    fit_1, fit_2 = _Fitter(basis_1[:, :widest]), _Fitter(basis_2[:, :widest])
+    for i, k in enumerate(sizes):
+        p = fit_width(k, config, columns)
+        b1, b2 = basis_1[:, :p], basis_2[:, :p]
+        c_12, c_21 = fit_1.fit(b2[map_12, :k], p), fit_2.fit(b1[map_21, :k], p)
+        if config.commutativity > 0 and values_1 is not None and values_2 is not None:
+            c_12 = c_12 * commutativity_shrinkage(values_1, values_2, p, k, config.commutativity)
+            c_21 = c_21 * commutativity_shrinkage(values_2, values_1, p, k, config.commutativity)
+        if i < len(sizes) - 1:
+            g_1, g_2 = (coarse_1, coarse_2) if k <= config.signature_until else (None, None)
+            g_1, g_2 = _joined(g_1, steady_1), _joined(g_2, steady_2)
+            q, r = map_embeddings(b1, b2, c_12, c_21, config, fields_1, fields_2, g_1, g_2)
+            map_12 = nearest_rows(r, q)
+            q, r = map_embeddings(b2, b1, c_21, c_12, config, fields_2, fields_1, g_2, g_1)
+            map_21 = nearest_rows(r, q)
+    return c_12, c_21
+
+
+def _joined(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
+    """Columns of ``a`` beside those of ``b``, either of which may be ``None``."""
+    return b if a is None else a if b is None else np.hstack([a, b])
+
+
+def read_out_map(shape_2, basis_1: np.ndarray, basis_2: np.ndarray, c_12: np.ndarray, c_21: np.ndarray,
+                 config: DenseConfig, coords_1: np.ndarray, coords_2: np.ndarray,
+                 sample_2: np.ndarray, steady_1: np.ndarray | None = None,
+                 steady_2: np.ndarray | None = None) -> np.ndarray:
+    """``(n1,)`` for every source vertex a target vertex (prepared numbering): the nearest rows of
+    the :func:`map_embeddings` of functional maps ``c_12, c_21 (p, k)`` on the bases ``(n_i,
+    >= p)``, the landmark coordinates ``(n_i, c)`` and, as they are, ``steady_i (n_i, t)`` (the
+    weighted signature turns, when given); a target mesh of more than
+    ``config.local_search_above`` vertices is searched near each image's nearest ZoomOut sample
+    (``sample_2``, see :func:`darcyan.geometry.knn.nearest_rows_near`)."""
+    q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, steady_1, steady_2)
+    mesh_2 = shape_2.mesh
+    if mesh_2.n_vertices > config.local_search_above and len(sample_2) < mesh_2.n_vertices:
+        return nearest_rows_near(r, q, mesh_2.vertices, sample_2, config.local_search_reach)
+    return nearest_rows(r, q)
+
+
+def consensus_map(positions: np.ndarray, maps: list) -> np.ndarray:
+    """``(n1,)`` per source vertex the medoid of its images under ``maps`` (each ``(n1,)``, rows of
+    ``positions (n2, 3)``): the image with the least sum of distances to the others (the first
+    such, in the order of ``maps``). ZoomOut from different samples settles in different local
+    optima, each right over most of the body and wrong, if anywhere, in a region of its own; where
+    two of three agree, the medoid keeps them."""
+    if len(maps) < 3:
+        return maps[0]
+    images = np.stack([positions[m] for m in maps])  # (K, n1, 3)
+    spread = np.zeros((len(maps), images.shape[1]))
+    for i, j in zip(*np.triu_indices(len(maps), k=1)):
+        gap = np.linalg.norm(images[i] - images[j], axis=1)
+        spread[i] += gap
+        spread[j] += gap
+    return np.stack(maps)[np.argmin(spread, axis=0), np.arange(images.shape[1])]
