@@ -28,7 +28,7 @@ import numpy as np
 from mirror_test import oracle
 
 from darcyan import DarcyanConfig
-from darcyan.bench.runner import default_pairs, discover_dataset, read_pairs, shape_class
+from darcyan.bench.datasets import default_pairs, discover_dataset, read_pairs, shape_class
 from darcyan.errors import DarcyanError
 from darcyan.io.cache import ShapeCache
 from darcyan.method import symmetry

@@ -25,7 +25,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from darcyan import DarcyanConfig, load_mesh
-from darcyan.bench.runner import default_pairs, discover_dataset, read_pairs, shape_class
+from darcyan.bench.datasets import default_pairs, discover_dataset, read_pairs, shape_class
 from darcyan.errors import DarcyanError
 from darcyan.eval.metrics import read_vts
 from darcyan.io.cache import ShapeCache

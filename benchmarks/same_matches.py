@@ -21,7 +21,7 @@ import sys
 import time
 
 from darcyan import DarcyanConfig
-from darcyan.bench.runner import default_pairs, discover_dataset, read_pairs
+from darcyan.bench.datasets import default_pairs, discover_dataset, read_pairs
 from darcyan.config import DESCRIBE, PREPARE
 from darcyan.errors import DarcyanError
 from darcyan.io.cache import ShapeCache

@@ -4,7 +4,8 @@ import json
 
 import pytest
 
-from darcyan.bench.runner import discover_dataset, read_pairs, run_bench
+from darcyan.bench.datasets import discover_dataset, read_pairs
+from darcyan.bench.runner import run_bench
 from darcyan.errors import DarcyanError
 from darcyan.geometry import synthetic
 from darcyan.io.mesh_files import save_mesh

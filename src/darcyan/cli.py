@@ -391,7 +391,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from .bench.runner import report_markdown, run_bench
+    from .bench.report import report_markdown
+    from .bench.runner import run_bench
 
     result = run_bench(args.dataset, args.out, methods=args.method, pairs_file=args.pairs, threshold=args.threshold,
                        config=_config(args), jobs=args.jobs, scheduler=args.scheduler, resume=args.resume,

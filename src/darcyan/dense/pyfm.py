@@ -15,6 +15,7 @@ import numpy as np
 
 from ..errors import require
 from ..geometry.mesh import Mesh
+from ..geometry.spectral import START_SEED
 
 
 @dataclass(frozen=True)
@@ -42,6 +43,7 @@ README_PIPELINE = PyfmPipeline(descriptors=100, descriptor_step=5, spectrum=128,
                                zoomout_to=50, weights={"w_descr": 1.0, "w_lap": 1e-2, "w_dcomm": 1e-1, "w_orient": 0.0})
 DENSE_PIPELINE = PyfmPipeline(descriptors=100, descriptor_step=5, spectrum=200, fmap_size=50, zoomout_step=10,
                               zoomout_to=200, weights={"w_descr": 1e0, "w_lap": 1e-2, "w_dcomm": 1e-1})
+PYFM_SHIFT = -0.01  # the shift of pyFM's own laplacian_spectrum
 
 
 def pyfm_mesh(mesh: Mesh, spectrum: tuple | None = None):
@@ -57,11 +59,18 @@ def pyfm_mesh(mesh: Mesh, spectrum: tuple | None = None):
 
 
 def pyfm_spectrum(mesh: Mesh, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """``(values (k,), vectors (n, k))``: pyfmaps' own eigenpairs of ``mesh`` (for caching)."""
+    """``(values (k,), vectors (n, k))``: pyfmaps' own eigenproblem of ``mesh`` (its cotangent
+    operators, solved as its ``laplacian_spectrum`` does: ``eigsh`` about :data:`PYFM_SHIFT`),
+    from a fixed start vector. pyFM lets ARPACK draw its start, whose state carries over from
+    one call to the next in a process: the same pair's map changed at 1.5% of its vertices
+    between two calls, and a bench's pyFM figures from one run to the next."""
+    from scipy.sparse.linalg import eigsh
+
     tri = pyfm_mesh(mesh)
     tri.compute_operators()
-    tri.process(k=min(k, mesh.n_vertices - 2))
-    return np.asarray(tri.eigenvalues), np.asarray(tri.eigenvectors)
+    start = np.random.default_rng(START_SEED).uniform(-1.0, 1.0, mesh.n_vertices)
+    values, vectors = eigsh(tri.stiffness, k=min(k, mesh.n_vertices - 2), M=tri.mass, sigma=PYFM_SHIFT, v0=start)
+    return np.asarray(values), np.asarray(vectors)
 
 
 def pyfm_point_map(mesh_1: Mesh, mesh_2: Mesh, pipeline: PyfmPipeline = DENSE_PIPELINE,
@@ -71,9 +80,12 @@ def pyfm_point_map(mesh_1: Mesh, mesh_2: Mesh, pipeline: PyfmPipeline = DENSE_PI
 
     ``landmarks_i (k,)``: pairwise corresponding vertices (local indices), used as extra
     descriptors; ``spectra``: ``(values, vectors)`` of each mesh from :func:`pyfm_spectrum`, or
-    ``None``. Both meshes prepared and of area 1.
+    ``None`` to compute them here (the same, seeded: the same map every call). Both meshes
+    prepared and of area 1.
     """
     functional = require("pyFM.functional", "pyfm")
+    spectra = tuple(pyfm_spectrum(mesh, pipeline.spectrum) if spectrum is None else spectrum
+                    for mesh, spectrum in zip((mesh_1, mesh_2), spectra))
     # pyFM maps its second mesh's vertices onto its first: mesh 2 goes first.
     model = functional.FunctionalMapping(pyfm_mesh(mesh_2, spectra[1]), pyfm_mesh(mesh_1, spectra[0]))
     extra = {} if landmarks_1 is None else {"landmarks": np.stack([landmarks_2, landmarks_1], axis=1)}
