@@ -48,6 +48,7 @@ def _valid_files() -> dict[str, bytes]:
         "ascii.ply": tm.export(file_type="ply", encoding="ascii"),
         ".stl": tm.export(file_type="stl"),
         "ascii.stl": tm.export(file_type="stl_ascii").encode(),
+        ".glb": tm.export(file_type="glb"),
         ".vert": "".join(f"{x} {y} {z}\n" for x, y, z in VERTICES).encode(),
         ".tri": "".join(f"{a + 1} {b + 1} {c + 1}\n" for a, b, c in FACES).encode(),
     }
@@ -139,7 +140,7 @@ def test_truncated_valid_files(folder, kind, cut):
     check_loads_or_mesh_error(folder, kind, data[:cut % (len(data) + 1)])
 
 
-@pytest.mark.parametrize("kind", [k for k in KINDS if k not in (".ply", ".stl")])  # the text formats
+@pytest.mark.parametrize("kind", [k for k in KINDS if k not in (".ply", ".stl", ".glb")])  # the text formats
 @FUZZ_SETTINGS
 @given(edits=st.lists(st.tuples(st.integers(0, 200), st.integers(0, 2), TOKENS), min_size=1, max_size=4))
 def test_text_files_with_token_edits(folder, kind, edits):

@@ -79,6 +79,63 @@ def test_stl_is_read_as_the_triangle_soup_trimesh_writes(tmp_path, encoding):
     np.testing.assert_array_equal(back.vertices[back.faces], corners)
 
 
+
+@pytest.mark.parametrize("ext", [".glb", ".gltf"])
+def test_gltf_is_read_with_its_vertex_order_and_its_nodes_placed(tmp_path, ext):
+    import trimesh
+
+    mesh = synthetic.icosphere(2)
+    path = tmp_path / f"one{ext}"
+    trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).export(path)
+    back = load_mesh(path)
+    np.testing.assert_allclose(back.vertices, mesh.vertices, atol=1e-6)  # float32 in the file
+    np.testing.assert_array_equal(back.faces, mesh.faces)
+    # Two meshes, the second moved by its node: both read, each where its node puts it.
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.Trimesh(mesh.vertices, mesh.faces, process=False), node_name="a", geom_name="a")
+    scene.add_geometry(trimesh.Trimesh(mesh.vertices, mesh.faces, process=False), node_name="b", geom_name="b",
+                       transform=trimesh.transformations.translation_matrix([5.0, 0.0, 0.0]))
+    scene.export(tmp_path / f"two{ext}")
+    two = load_mesh(tmp_path / f"two{ext}")
+    assert two.n_vertices == 2 * mesh.n_vertices and two.n_faces == 2 * mesh.n_faces
+    moved = two.vertices[:, 0] > 2.5
+    assert moved.sum() == mesh.n_vertices
+    np.testing.assert_allclose(np.sort(two.vertices[moved] - [5.0, 0.0, 0.0], axis=0), np.sort(mesh.vertices, axis=0),
+                               atol=1e-6)
+
+
+def test_a_bad_gltf_is_one_error_naming_it(tmp_path):
+    import trimesh
+
+    with pytest.raises(MeshError, match=r"bad\.glb: not a readable glTF file"):
+        load_mesh(write(tmp_path, "bad.glb", b"glTF" + bytes(40)))
+    trimesh.Trimesh(TETRA_V, TETRA_F, process=False).export(tmp_path / "t.gltf")
+    buffer = next(tmp_path.glob("*.bin"))
+    buffer.unlink()
+    with pytest.raises(MeshError, match=rf"t\.gltf: its buffer {buffer.name} is missing"):
+        load_mesh(tmp_path / "t.gltf")
+    points = trimesh.Scene(trimesh.PointCloud(TETRA_V))
+    points.export(tmp_path / "points.glb")
+    with pytest.raises(MeshError, match="points.glb: no triangles"):
+        load_mesh(tmp_path / "points.glb")
+
+
+def test_the_cache_key_of_a_gltf_follows_its_buffer(tmp_path):
+    # A .gltf keeps its geometry in the files it names: a changed buffer is another mesh, a
+    # renamed copy of the same files the same one.
+    import trimesh
+
+    from darcyan.io.cache import file_digest
+
+    trimesh.Trimesh(TETRA_V, TETRA_F, process=False).export(tmp_path / "t.gltf")
+    text, before = (tmp_path / "t.gltf").read_bytes(), file_digest(tmp_path / "t.gltf")
+    # trimesh names its buffers gltf_buffer_0.bin, ...: this export overwrites t.gltf's.
+    trimesh.Trimesh(TETRA_V * 2.0, TETRA_F, process=False).export(tmp_path / "u.gltf")
+    assert (tmp_path / "t.gltf").read_bytes() == text and file_digest(tmp_path / "t.gltf") != before
+    np.testing.assert_allclose(load_mesh(tmp_path / "t.gltf").vertices, TETRA_V * 2.0)
+    (tmp_path / "copy.gltf").write_bytes(text)
+    assert file_digest(tmp_path / "copy.gltf") == file_digest(tmp_path / "t.gltf")
+
 @pytest.mark.parametrize("name, text", [
     ("points.xyz", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n"),
     ("points.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"

@@ -417,7 +417,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("match", help="match the feature points of two meshes",
                        description="Match the extremities of SOURCE to those of TARGET. Writes CSV "
                                    "source_vertex,target_vertex,distance (0-based vertex indices of the files).")
-    p.add_argument("source", help="mesh file (.off .obj .ply .stl .vert/.tri)")
+    p.add_argument("source", help="mesh file (.off .obj .ply .stl .glb .gltf .vert/.tri)")
     p.add_argument("targets", nargs="+", metavar="target", help="one or more mesh files, each matched with the source "
                    "(described once)")
     p.add_argument("-o", "--output", help="file to write (default: stdout); with several targets and --dense, a folder "
@@ -462,7 +462,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Draws the surface around a feature point (default: feature 0) or a vertex, "
                                    "the n geodesic level curves and m radial lines of its Darcyan grid, and the "
                                    "intersection points coloured by curvature, seen from in front of the point.")
-    p.add_argument("mesh", help="mesh file (.off .obj .ply .vert/.tri)")
+    p.add_argument("mesh", help="mesh file (.off .obj .ply .stl .glb .gltf .vert/.tri)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--vertex", type=int, metavar="V", help="centre: vertex V of the file (0-based)")
     where.add_argument("--feature", type=int, metavar="K", help="centre: feature point K (0-based row of 'darcyan features'; default 0)")

@@ -44,14 +44,17 @@ def code_digest() -> str:
 
 
 def file_digest(path: str | os.PathLike) -> str:
-    """sha1 of a file's bytes (and, for TOSCA ``.vert``/``.tri``, of its sibling too)."""
-    from .mesh_files import _read_bytes  # the same clear errors as loading
+    """sha1 of the bytes a mesh is read from: the file's, and those of the files it needs beside
+    it (:func:`~darcyan.io.mesh_files.mesh_file_parts`: TOSCA's ``.vert``/``.tri`` sibling, a
+    ``.gltf`` file's buffers; one that is missing counts as such, and loading then says so)."""
+    from .mesh_files import _read_bytes, mesh_file_parts  # the same clear errors as loading
 
     path = Path(path)
     h = hashlib.sha1()
-    paths = [path.with_suffix(".vert"), path.with_suffix(".tri")] if path.suffix.lower() in (".vert", ".tri") else [path]
-    for p in paths:
-        h.update(_read_bytes(p))
+    parts = mesh_file_parts(path)
+    required = len(parts) if path.suffix.lower() in (".vert", ".tri") else 1  # a .gltf's buffers: loading names one missing
+    for i, part in enumerate(parts):
+        h.update(_read_bytes(part) if i < required or part.is_file() else b"(missing)")
     return h.hexdigest()
 
 

@@ -1,10 +1,10 @@
-"""Mesh files: strict readers (OFF, OBJ, PLY, STL, TOSCA ``.vert``/``.tri``) and writers.
+"""Mesh files: strict readers (OFF, OBJ, PLY, STL, glTF, TOSCA ``.vert``/``.tri``) and writers.
 
 Every reader keeps the file's vertices in the file's order with the file's coordinates (nothing
 merged, dropped or reordered) and gives triangles; every problem is one :class:`MeshError` line
 naming the file, and the line where there is one.
 
-PLY and STL records are read by trimesh. Its PLY reader takes the layout on trust (lines after the
+PLY, STL and glTF records are read by trimesh. Its PLY reader takes the layout on trust (lines after the
 last element are ignored, ``4 0 1 2`` in a list of triangles is a triangle, a line of spaces in the
 body a vertex at -1), so the header and an ASCII body's lines are checked before it runs, and a
 binary body's list lengths after. OFF, OBJ and ``.vert``/``.tri`` are parsed here: trimesh knows no
@@ -26,7 +26,7 @@ from ..errors import MeshError
 from ..geometry.mesh import Mesh, MeshWarning
 from ..geometry.repair import check_mesh
 
-READ_FORMATS = (".off", ".obj", ".ply", ".stl", ".vert", ".tri")
+READ_FORMATS = (".off", ".obj", ".ply", ".stl", ".glb", ".gltf", ".vert", ".tri")
 WRITE_FORMATS = (".off", ".ply")
 POINT_FORMATS = (".xyz",)  # recognised only to say that a triangle mesh is needed
 
@@ -35,11 +35,12 @@ POINT_FORMATS = (".xyz",)  # recognised only to say that a triangle mesh is need
 
 
 def load_mesh(path: str | os.PathLike) -> Mesh:
-    """Read a triangle mesh from OFF, OBJ, PLY or STL (ASCII or binary), or TOSCA's ``.vert``+``.tri``.
+    """Read a triangle mesh from OFF, OBJ, PLY or STL (ASCII or binary), glTF 2.0 (``.glb``, or
+    ``.gltf`` with its buffers beside it), or TOSCA's ``.vert``+``.tri``.
 
     Polygons with more than three corners are split into triangles (fan). STL stores every
     triangle with its own three corners: it is read as that triangle soup (three vertices per
-    face, nothing welded); ``--repair`` welds it. The mesh is checked by :func:`check_mesh`;
+    face, nothing welded); ``--repair`` welds it. glTF: see :func:`_read_gltf`. The mesh is checked by :func:`check_mesh`;
     nothing is repaired or dropped here.
 
     Raises:
@@ -57,13 +58,35 @@ def load_mesh(path: str | os.PathLike) -> Mesh:
         data = _read_bytes(path)
         if not data.strip():
             raise MeshError(path, "empty file")
-        read = {".off": _read_off, ".obj": _read_obj, ".ply": _read_ply, ".stl": _read_stl, ".xyz": _read_xyz}[ext]
+        read = {".off": _read_off, ".obj": _read_obj, ".ply": _read_ply, ".stl": _read_stl, ".glb": _read_gltf,
+                ".gltf": _read_gltf, ".xyz": _read_xyz}[ext]
         vertices, faces = read(data, path)
     if len(faces) == 0 and len(vertices) > 0:
         raise MeshError(path, f"{len(vertices)} points and no faces: a triangle mesh is needed")
     mesh = Mesh(vertices, faces, name=str(path))
     check_mesh(mesh)
     return mesh
+
+
+def mesh_file_parts(path: str | os.PathLike) -> list[Path]:
+    """The files a mesh is read from: ``path``, and beside it TOSCA's other half (``.vert`` and
+    ``.tri``, in that order) or the buffers a ``.gltf`` file names (its geometry lives there; an
+    unreadable ``.gltf`` names none, and loading says why)."""
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext in (".vert", ".tri"):
+        return [path.with_suffix(".vert"), path.with_suffix(".tri")]
+    if ext != ".gltf" or not path.is_file():
+        return [path]
+    import json
+    from urllib.parse import unquote
+
+    try:
+        document = json.loads(path.read_bytes())
+        uris = [buffer.get("uri") for buffer in document.get("buffers", [])]
+    except (OSError, ValueError, AttributeError, TypeError):
+        return [path]
+    return [path] + [path.parent / unquote(uri) for uri in uris if isinstance(uri, str) and not uri.startswith("data:")]
 
 
 def _read_bytes(path: Path) -> bytes:
@@ -513,6 +536,31 @@ def _read_stl(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
         raise MeshError(path, f"ASCII STL with {text.count('endfacet')} facets and {text.count('vertex')} 'vertex' "
                               f"lines, {len(vertices)} vertices read: every facet needs 3 vertices of 3 numbers")
     return vertices, np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
+
+
+def _read_gltf(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """glTF 2.0 as trimesh reads it (a ``.gltf`` file's buffers from its folder): the triangles of
+    every mesh of the scene, each placed by its node's transform, one after another in the order
+    trimesh lists them; a file of one mesh keeps its own vertex order. Points and lines are left
+    out. A glTF splits its vertices along texture and normal seams: the seam check names
+    ``--repair``, which welds them."""
+    import trimesh  # here: importing trimesh takes half a second
+
+    fmt = path.suffix.lower()[1:]
+    missing = [part.name for part in mesh_file_parts(path)[1:] if not part.is_file()]
+    if missing:
+        raise MeshError(path, f"its buffer {missing[0]} is missing (a .gltf file keeps its geometry in the files "
+                              f"it names, beside it)")
+    try:
+        resolver = trimesh.resolvers.FilePathResolver(path.parent) if fmt == "gltf" else None
+        loaded = trimesh.load(io.BytesIO(data), file_type=fmt, force="mesh", process=False, resolver=resolver)
+    except Exception as exc:  # a third-party parser raises whatever it trips on
+        detail = " ".join(str(exc).split())[:160] or type(exc).__name__
+        raise MeshError(path, f"not a readable glTF file ({detail})") from None
+    faces = np.asarray(getattr(loaded, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
+    if len(faces) == 0:
+        raise MeshError(path, "no triangles (a glTF scene without meshes, or of points and lines only)")
+    return np.asarray(loaded.vertices, dtype=np.float64).reshape(-1, 3), faces
 
 
 def _read_xyz(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
