@@ -150,7 +150,7 @@ def test_reflection_symmetry_finds_the_plane_of_a_symmetric_shape_and_not_of_the
     assert (found.vertices[found.vertices] == np.arange(ellipsoid.n_vertices)).mean() > 0.99  # an involution
     assert (found.vertices != np.arange(ellipsoid.n_vertices)).mean() > 0.9
     # The built-in figure is deliberately asymmetric.
-    from darcyan.bench.work import MIRROR_MAX_RESIDUAL
+    from darcyan.bench.settings import MIRROR_MAX_RESIDUAL
 
     assert reflection_symmetry(synthetic.figure(0)).residual > 3 * MIRROR_MAX_RESIDUAL
 

@@ -49,6 +49,7 @@ def _valid_files() -> dict[str, bytes]:
         ".stl": tm.export(file_type="stl"),
         "ascii.stl": tm.export(file_type="stl_ascii").encode(),
         ".glb": tm.export(file_type="glb"),
+        ".gltf": trimesh.exchange.gltf.export_gltf(trimesh.Scene(tm), embed_buffers=True)["model.gltf"],
         ".vert": "".join(f"{x} {y} {z}\n" for x, y, z in VERTICES).encode(),
         ".tri": "".join(f"{a + 1} {b + 1} {c + 1}\n" for a, b, c in FACES).encode(),
     }

@@ -120,6 +120,34 @@ def test_a_bad_gltf_is_one_error_naming_it(tmp_path):
         load_mesh(tmp_path / "points.glb")
 
 
+def test_a_gltf_buffer_must_be_a_file_beside_it(tmp_path):
+    # Percent-encoded names are read (the glTF spec's URIs); a URL, a path out of the folder, a
+    # malformed file are each one error line naming the .gltf.
+    import json
+
+    import trimesh
+
+    folder = tmp_path / "model"
+    folder.mkdir()
+    trimesh.Trimesh(TETRA_V, TETRA_F, process=False).export(folder / "t.gltf")
+    document = json.loads((folder / "t.gltf").read_text())
+    for buffer in document["buffers"]:
+        old = folder / buffer["uri"]
+        buffer["uri"] = "my%20" + buffer["uri"]
+        old.rename(folder / ("my " + old.name))
+    (folder / "spaced.gltf").write_text(json.dumps(document))
+    np.testing.assert_allclose(load_mesh(folder / "spaced.gltf").vertices, TETRA_V)
+    for uri, problem in (("../outside.bin", "lies outside its folder"), ("https://example.com/b.bin", "not a local file"),
+                         ("", "names no file")):
+        document["buffers"][0]["uri"] = uri
+        (folder / "bad.gltf").write_text(json.dumps(document))
+        with pytest.raises(MeshError, match=f"bad.gltf: .*{problem}"):
+            load_mesh(folder / "bad.gltf")
+    (folder / "broken.gltf").write_text('{"asset": {"version": "2.0"}, "buffers": [')
+    with pytest.raises(MeshError, match="broken.gltf: not a glTF file: its JSON does not parse"):
+        load_mesh(folder / "broken.gltf")
+
+
 def test_the_cache_key_of_a_gltf_follows_its_buffer(tmp_path):
     # A .gltf keeps its geometry in the files it names: a changed buffer is another mesh, a
     # renamed copy of the same files the same one.

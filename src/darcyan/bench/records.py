@@ -8,8 +8,6 @@ import numpy as np
 DENSE = "dense"  # the "kind" of a dense record in the journal (sparse records have no kind)
 
 
-
-
 def record_kind(record: dict) -> str:
     """``"dense"`` for a dense record of the journal, ``"sparse"`` for the others."""
     return record.get("kind", "sparse")
@@ -21,4 +19,5 @@ def json_floats(values) -> list:
 
 
 def record_array(values) -> np.ndarray:
+    """The inverse of :func:`json_floats`: ``None`` back to NaN, as a float array."""
     return np.array([np.nan if v is None else v for v in values], dtype=np.float64)

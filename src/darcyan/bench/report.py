@@ -19,8 +19,7 @@ from ..eval.metrics import (
 from . import DENSE_METHODS, METHODS
 from .datasets import Dataset
 from .records import DENSE, record_array, record_kind
-from .settings import BenchSettings
-from .work import MIRROR_MAX_RESIDUAL
+from .settings import MIRROR_MAX_RESIDUAL, BenchSettings
 
 RATE_DEFINITION = (
     "rate = correct / matches, pooled over every match of the class's pairs (with nearest-descriptor "

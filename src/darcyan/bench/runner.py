@@ -1,11 +1,7 @@
 """The evaluation harness behind ``darcyan bench``: correspondence rates on a folder of meshes.
 
-A dataset is a folder of meshes named ``{class}{pose}.off|.ply|.obj`` (the class is the name
-without its trailing digits). Ground truth comes from ``corres/{shape}.vts`` when that folder
-exists (line i of A.vts and B.vts are the same body point, 1-based; ``corres/{shape}.sym.vts``
-its mirror image), else it is the identity on vertex indices within a class (which needs equal
-vertex counts). Pairs are every ordered pair within a class, or the ``source<TAB>target`` lines
-of a pairs file.
+A dataset is a folder of meshes with their ground truth, and its pairs every ordered pair
+within a class or the lines of a pairs file (:mod:`darcyan.bench.datasets`).
 
 Every method is evaluated at darcyan's own feature points of the source shape, on the same
 targets and with the same metric (:mod:`darcyan.eval.metrics`), so the tables compare
@@ -20,8 +16,8 @@ descriptors, not set-ups:
 The run has two phases, both parallel (``jobs`` local processes, or a ``dask.distributed``
 scheduler): per-shape work (description, spectra, nearest ground-truth samples, cached on disk
 by file content and parameters) and per-pair work (matching and scoring; all methods of a pair
-share the target's distance fields). Each finished pair is appended to ``pairs.jsonl`` in the
-output folder at once, and the summaries (``results.json``, ``pairs.csv``, ``report.md``) are
+share the target's distance fields), both in :mod:`darcyan.bench.work`. Each finished pair is
+appended to ``pairs.jsonl`` in the output folder at once, and the summaries (``results.json``, ``pairs.csv``, ``report.md``) are
 rewritten as pairs finish, so an interrupted run loses nothing and ``resume`` skips what is done.
 
 With ``dense=True`` (``darcyan bench --dense``) each pair also gets dense maps, scored on a fixed
@@ -35,7 +31,7 @@ the same vertices for every method; for vts data the sample is drawn among the l
   (:func:`darcyan.dense.pyfm_own_map`: WKS, a 50 x 50 functional map, ZoomOut to 200).
 
 They go to ``results.json`` under ``dense.<method>.overall|classes|pairs``, a section of
-``report.md`` and ``dense_curve.png``.
+``report.md`` and ``dense_curve.png`` (:mod:`darcyan.bench.report`, :mod:`darcyan.bench.plots`).
 """
 
 from __future__ import annotations
@@ -52,9 +48,7 @@ import numpy as np
 from ..config import DarcyanConfig
 from ..errors import DarcyanError, require
 from ..eval.dense_scores import DENSE_SAMPLE
-from ..eval.metrics import (
-    DEFAULT_THRESHOLD,
-)
+from ..eval.metrics import DEFAULT_THRESHOLD
 from ..geometry import spectral as lbo
 from ..io.cache import ShapeCache
 from ..parallel import process_map

@@ -7,11 +7,11 @@ from dataclasses import dataclass, field
 from ..config import DarcyanConfig
 from ..dense import pyfm
 from ..eval.dense_scores import DENSE_SAMPLE, DENSE_SEED
-from ..eval.metrics import (
-    DEFAULT_THRESHOLD,
-)
+from ..eval.metrics import DEFAULT_THRESHOLD
 from ..geometry import spectral as lbo
 from . import DENSE_METHODS
+
+MIRROR_MAX_RESIDUAL = 0.005  # a pose whose best reflection leaves more (sqrt(area) units) is not symmetric
 
 
 @dataclass(frozen=True)
@@ -38,10 +38,10 @@ class BenchSettings:
             return None
         import dataclasses
 
-        from ..dense import maps as dense
+        from ..dense.config import DenseConfig
 
         return {"samples": self.dense_samples, "seed": self.dense_seed,
-                "config": dataclasses.asdict(dense.DenseConfig()),
+                "config": dataclasses.asdict(DenseConfig()),
                 "pyfm": dataclasses.asdict(pyfm.DENSE_PIPELINE)}
 
     def as_dict(self) -> dict:

@@ -28,10 +28,9 @@ from ..geometry.shape import Shape
 from ..io.cache import ShapeCache, code_digest, file_digest
 from .datasets import Dataset
 from .records import DENSE, json_floats
-from .settings import BenchSettings
+from .settings import MIRROR_MAX_RESIDUAL, BenchSettings
 
 PREPARED_MEMO = 3  # prepared meshes kept per worker process (tasks come grouped by target)
-MIRROR_MAX_RESIDUAL = 0.005  # a pose whose best reflection leaves more (sqrt(area) units) is not symmetric
 MIRROR_VALIDATION_SAMPLES = 200  # .sym.vts samples compared with a derived mirror map
 _MEMO: OrderedDict = OrderedDict()  # prepared shapes of this worker process, most recent last
 

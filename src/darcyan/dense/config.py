@@ -16,7 +16,7 @@ SAMPLINGS = ("farthest", "random")  # DenseConfig.sampling
 
 @dataclass(frozen=True)
 class DenseConfig:
-    """Parameters of :func:`dense_map`.
+    """Parameters of :func:`~darcyan.dense.maps.dense_map`.
 
     Attributes:
         method: ``"zoomout"``: geodesic landmark coordinates, then the bijective ZoomOut below;
@@ -47,7 +47,7 @@ class DenseConfig:
             all vertices); the final map is always computed for every source vertex.
         ensemble: ZoomOut runs from this many different samples (the first as ``sampling``
             says, the others independent random draws, from ``seed``), combined by
-            :func:`consensus_map` (per source vertex the medoid of the images; 1 or 2: one run, a
+            :func:`~darcyan.dense.zoomout.consensus_map` (per source vertex the medoid of the images; 1 or 2: one run, a
             medoid needs three).
         bijectivity, orthogonality: scales of the bijectivity (the map b -> a undoes a -> b)
             and orthogonality (area preservation) terms beside the coupling term in ZoomOut's
@@ -58,7 +58,7 @@ class DenseConfig:
             and, with ``orientation_weight``, their turns) beside the spectral terms in every
             ZoomOut step and in the final map: the landmarks hold the map throughout, not only
             at its start (3: ``docs/parameters.md``).
-        orientation_weight: weight of the :func:`orientation_coordinates` beside the geodesic
+        orientation_weight: weight of the :func:`~darcyan.dense.landmarks.orientation_coordinates` beside the geodesic
             distances to the landmarks in the first map and in the landmark term (0: distances
             only). Distances to five extremities of a human cannot tell its front from its back:
             on FAUST, maps without them were flipped over a third of the body in 12 of 40 pairs.
@@ -70,12 +70,12 @@ class DenseConfig:
             (:meth:`darcyan.geometry.shape.Shape.smooth_basis`); 0: always on the mesh itself.
         candidates: the sparse matching and its first ``candidates - 1`` alternatives
             (``Correspondence.alternatives``) are each turned into a first map; the one whose
-            map best keeps the :func:`point_signature` seeds the dense map (1: the sparse
+            map best keeps the :func:`~darcyan.dense.signatures.point_signature` seeds the dense map (1: the sparse
             matching alone). A seed of mirrored landmarks otherwise ruins a whole map.
         seed_basis, seed_samples: size of the short ZoomOut that scores each seed, and the
             samples it runs on.
         signature_lengths: diffusion lengths (sqrt(area)) of the mean curvature in that signature.
-        signature_weight: weight of the :func:`point_signature` (each length divided by its
+        signature_weight: weight of the :func:`~darcyan.dense.signatures.point_signature` (each length divided by its
             standard deviation over both shapes) beside the other terms of the chosen seed's
             ZoomOut steps up to ``signature_until`` eigenfunctions (0: never). At the coarse sizes
             the landmark coordinates cannot tell which way an arm or a chest is turned, and a
@@ -83,7 +83,7 @@ class DenseConfig:
             At the fine sizes the signature (which changes with the pose) would bias the map,
             so it is dropped (``docs/parameters.md``).
         signature_until: the largest basis size whose ZoomOut step uses the signature.
-        signature_turns: weight of the :func:`signature_turn_coordinates` (at each vertex, the
+        signature_turns: weight of the :func:`~darcyan.dense.signatures.signature_turn_coordinates` (at each vertex, the
             turn from the gradient of the distance to each landmark to the gradient of each
             length of the point signature) beside the other terms of every ZoomOut step of the
             chosen seed and of the final read-out (0: never). Along a limb the distances to all
@@ -103,7 +103,7 @@ class DenseConfig:
         commutativity: weight of a Laplacian commutativity term in the functional maps of the
             chosen seed's ZoomOut (its steps and final map): each entry ``C[i, j]`` of a
             least-squares fit is shrunk by ``1 / (1 + commutativity ((l_i - l_j) / (l_i +
-            l_j))^2)`` (``l`` the eigenvalues; :func:`commutativity_shrinkage`), so a map mixes
+            l_j))^2)`` (``l`` the eigenvalues; :func:`~darcyan.dense.zoomout.commutativity_shrinkage`), so a map mixes
             eigenfunctions of unlike frequencies only where the point map insists. Between two
             bodies a point map's noise spreads over all the entries, and a plain fit carries it
             into the next step. 0: plain ZoomOut fits. The short ZoomOuts that score the seeds

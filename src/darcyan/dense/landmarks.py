@@ -118,7 +118,7 @@ def landmark_set(shape_1, shape_2, matching, config: DenseConfig, fields: tuple)
 def landmark_coordinates(shape_1, shape_2, matching, config: DenseConfig = DenseConfig()) -> tuple:
     """``(coords_1 (n1, c), coords_2 (n2, c))``: the landmark coordinates that a dense map seeded
     by ``matching`` (source_vertex, target_vertex in input numbering) uses beside the spectral
-    terms (see :func:`map_embeddings`), in prepared numbering.
+    terms (see :func:`~darcyan.dense.zoomout.map_embeddings`), in prepared numbering.
 
     Raises:
         DarcyanError: when ``matching`` has fewer than :data:`MIN_LANDMARKS` consistent matches.

@@ -53,7 +53,7 @@ class DenseMap:
             which seed was used (``seed``: 0 the sparse matching, i its i-th alternative, of
             ``seeds`` usable, distinct ones), its ``signature`` score, the ``runner_up``'s and every
             seed's (``signatures``: rank -> score), whether no other seed came within the
-            margin (``clear``) and whether the map is ``trusted`` (see :class:`DenseConfig`).
+            margin (``clear``) and whether the map is ``trusted`` (see :class:`~darcyan.dense.config.DenseConfig`).
     """
 
     target: np.ndarray
@@ -73,7 +73,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         correspondence: anything with ``source_vertex (k,)`` and ``target_vertex (k,)`` in input
             numbering (a :class:`~darcyan.method.pipeline.Correspondence`; ``distance (k,)``
             breaks ties between landmark sets).
-        config: see :class:`DenseConfig`.
+        config: see :class:`~darcyan.dense.config.DenseConfig`.
 
     Returns:
         a :class:`DenseMap`; ``.target`` is ``(n_input_vertices of shape_1,) int64`` in the input
@@ -81,7 +81,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
 
     Raises:
         DarcyanError: when a shape is a description only, or no seed (the correspondence or
-            one of its alternatives) has :data:`MIN_LANDMARKS` consistent landmark pairs. A
+            one of its alternatives) has :data:`~darcyan.dense.landmarks.MIN_LANDMARKS` consistent landmark pairs. A
             correspondence with fewer leaves the map to the best usable alternative.
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
@@ -142,10 +142,10 @@ def input_map(shape_1, shape_2, local: np.ndarray) -> np.ndarray:
 
 def map_check(shape_1, local: np.ndarray, distances_1, distances_2, turns_1, turns_2) -> dict:
     """How far a map ``local (n1,)`` (prepared numbering) keeps what its landmarks say:
-    ``orientation``, the area-weighted correlation of the :func:`orientation_coordinates` at each
-    source vertex and at its image (1: kept everywhere, -1: a mirror image); ``distortion``, the
-    area-weighted mean change of the geodesic distances to the landmarks from a vertex to its
-    image (sqrt(area) units)."""
+    ``orientation``, the area-weighted correlation of the
+    :func:`~darcyan.dense.landmarks.orientation_coordinates` at each source vertex and at its
+    image (1: kept everywhere, -1: a mirror image); ``distortion``, the area-weighted mean change
+    of the geodesic distances to the landmarks from a vertex to its image (sqrt(area) units)."""
     area = shape_1.vertex_areas / shape_1.vertex_areas.sum()
     a, b = turns_1, turns_2[local]
     a, b = a - area @ a, b - area @ b

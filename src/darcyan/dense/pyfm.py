@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import require
+from ..errors import MeshError, require
 from ..geometry.mesh import Mesh
 from ..geometry.spectral import START_SEED
 
@@ -69,7 +69,10 @@ def pyfm_spectrum(mesh: Mesh, k: int) -> tuple[np.ndarray, np.ndarray]:
     tri = pyfm_mesh(mesh)
     tri.compute_operators()
     start = np.random.default_rng(START_SEED).uniform(-1.0, 1.0, mesh.n_vertices)
-    values, vectors = eigsh(tri.stiffness, k=min(k, mesh.n_vertices - 2), M=tri.mass, sigma=PYFM_SHIFT, v0=start)
+    try:
+        values, vectors = eigsh(tri.stiffness, k=min(k, mesh.n_vertices - 2), M=tri.mass, sigma=PYFM_SHIFT, v0=start)
+    except (RuntimeError, ValueError) as exc:  # pyFM would fall back on LOBPCG: its baseline stops here
+        raise MeshError(mesh.name, f"pyFM's Laplace-Beltrami eigenproblem failed ({exc})") from None
     return np.asarray(values), np.asarray(vectors)
 
 

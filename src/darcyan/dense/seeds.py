@@ -1,7 +1,7 @@
 """The seed of a dense map: which matching (the sparse one or an alternative) it starts from.
 
 The sparse matching competes with the alternatives the sparse stage weighed
-(``Correspondence.alternatives``): each is turned into landmarks (:func:`landmark_set`) and
+(``Correspondence.alternatives``): each is turned into landmarks (:func:`~darcyan.dense.landmarks.landmark_set`) and
 seeds a short ZoomOut, and the one whose map best keeps the curvature signature
 (:func:`~darcyan.dense.signatures.point_signature`) seeds the dense map. A mirrored seed keeps
 every distance and, with the orientation coordinates, turns the body round, front onto back,
@@ -29,21 +29,21 @@ def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = Den
                      full_basis: bool = False):
     """The matching a dense map would be seeded by: ``correspondence`` itself, or the alternative
     (``correspondence.alternatives``) whose short ZoomOut map keeps the curvature signature
-    clearly better (see :class:`DenseConfig`: ``candidates``, ``seed_margin``). Scored on a
-    spectrum of the short ZoomOuts' size (:func:`seed_scoring_config`), where :func:`dense_map`
+    clearly better (see :class:`~darcyan.dense.config.DenseConfig`: ``candidates``, ``seed_margin``). Scored on a
+    spectrum of the short ZoomOuts' size (:func:`seed_scoring_config`), where :func:`~darcyan.dense.maps.dense_map`
     scores on its full basis: the same seed on every pair compared (``docs/parameters.md``), not
     by construction. Costs the two shapes' 30 first eigenfunctions and a short ZoomOut per
     candidate (choosing the seed of a 5k pair: 0.45 s, against 1.34 s on the full basis).
-    ``full_basis``: score on the dense map's full basis instead, exactly as :func:`dense_map`
+    ``full_basis``: score on the dense map's full basis instead, exactly as :func:`~darcyan.dense.maps.dense_map`
     does (when a dense map follows, which then reuses that basis).
 
     Returns ``(matches, about)``: a correspondence of the same kind as ``correspondence`` (its
     ``alternatives`` the others, the sparse matching first among them), and what
-    :attr:`DenseMap.check` says of seeds (``seed``, ``signatures``, ``clear``: no other
+    :attr:`~darcyan.dense.maps.DenseMap.check` says of seeds (``seed``, ``signatures``, ``clear``: no other
     candidate within the margin).
 
     Raises:
-        DarcyanError: when no candidate has :data:`MIN_LANDMARKS` consistent matches.
+        DarcyanError: when no candidate has :data:`~darcyan.dense.landmarks.MIN_LANDMARKS` consistent matches.
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
     scoring = config if full_basis else seed_scoring_config(config)
@@ -77,13 +77,13 @@ def matching_of_seed(correspondence, rank: int):
 
 def seed_scores(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig()) -> dict:
     """``{rank: score}``: the signature score of each usable seed (0: ``correspondence`` itself,
-    1, 2, ...: its alternatives), lower is better; the scores :func:`dense_map` chooses its seed
+    1, 2, ...: its alternatives), lower is better; the scores :func:`~darcyan.dense.maps.dense_map` chooses its seed
     by (see :func:`chosen_seed`), without making the map. Raises DarcyanError like it."""
     return verified_matches(shape_1, shape_2, correspondence, config, full_basis=True)[1]["signatures"]
 
 
 def seed_check(rank: int, signatures: dict, margin: float) -> dict:
-    """What :attr:`DenseMap.check` says of the seeds, from the chosen seed's ``rank`` and every
+    """What :attr:`~darcyan.dense.maps.DenseMap.check` says of the seeds, from the chosen seed's ``rank`` and every
     usable seed's score (``signatures``: rank -> score): ``clear`` when no other seed scores
     within ``margin`` (relative) of it."""
     others = sorted(score for r, score in signatures.items() if r != rank)
@@ -157,7 +157,7 @@ def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple
     alternatives (``correspondence.alternatives``, the other matchings the sparse stage
     weighed). With several, each seeds a short ZoomOut (``config.seed_basis`` eigenfunctions,
     ``config.seed_samples`` of the samples) scored by how well its map keeps the shapes'
-    :func:`point_signature`: a seed of mirrored landmarks yields a map that keeps their
+    :func:`~darcyan.dense.signatures.point_signature`: a seed of mirrored landmarks yields a map that keeps their
     orientation only by turning the body round (front onto back), which no landmark coordinate
     sees and the curvature of a face or a chest does. A matching whose consistent landmarks are
     those of an earlier one is left out."""
@@ -188,7 +188,7 @@ def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple
 
 class _SeedScoring:
     """What scoring a seed needs, built once per pair: ``seed_samples`` of the ZoomOut samples
-    (:func:`seed_subset`), the bases there and the point signatures."""
+    (:func:`~darcyan.dense.zoomout.seed_subset`), the bases there and the point signatures."""
 
     def __init__(self, shape_1, shape_2, config: DenseConfig, samples: tuple, bases: tuple):
         size = min(config.seed_basis, config.basis_size)

@@ -39,7 +39,7 @@ def signature_coordinates(shape_1, shape_2, config: DenseConfig, sample_1: np.nd
     """``(coarse_1 (s_1, c), coarse_2 (s_2, c))``: the :func:`point_signature` at the samples,
     each length divided by its standard deviation over both shapes' vertices and weighed by
     ``config.signature_weight`` (``(None, None)`` at weight 0): the coordinates that join the
-    coarse ZoomOut steps (:func:`zoomout`)."""
+    coarse ZoomOut steps (:func:`~darcyan.dense.zoomout.zoomout`)."""
     if config.signature_weight <= 0:
         return None, None
     s_1, s_2 = point_signature(shape_1, config), point_signature(shape_2, config)
@@ -54,7 +54,7 @@ def signature_turn_coordinates(shape_1, shape_2, config: DenseConfig, fields_1: 
     """``(turns_1 (n1, k l), turns_2 (n2, k l))``: at every vertex, the sine of the turn from the
     gradient of the distance to each of the k landmarks (``fields_i (n_i, k)``) to the gradient
     of each of the l lengths of the :func:`point_signature`, about the outward normal
-    (:func:`orientation_coordinates`), times ``config.signature_turns`` (``(None, None)`` at
+    (:func:`~darcyan.dense.landmarks.orientation_coordinates`), times ``config.signature_turns`` (``(None, None)`` at
     weight 0). An isometry keeps them and a reflection flips them, like the turns between
     landmarks; unlike those, they do not vanish along a limb, where the directions to all the
     landmarks run along it and only the curvature tells one side of it from another."""

@@ -50,11 +50,14 @@ def file_digest(path: str | os.PathLike) -> str:
     from .mesh_files import _read_bytes, mesh_file_parts  # the same clear errors as loading
 
     path = Path(path)
-    h = hashlib.sha1()
     parts = mesh_file_parts(path)
-    required = len(parts) if path.suffix.lower() in (".vert", ".tri") else 1  # a .gltf's buffers: loading names one missing
-    for i, part in enumerate(parts):
-        h.update(_read_bytes(part) if i < required or part.is_file() else b"(missing)")
+    if len(parts) == 1:
+        return hashlib.sha1(_read_bytes(path)).hexdigest()
+    # TOSCA's two halves must both be there; a missing buffer of a .gltf is named when loading.
+    required = len(parts) if path.suffix.lower() in (".vert", ".tri") else 1
+    h = hashlib.sha1()
+    for i, part in enumerate(parts):  # each part's own digest: no two layouts of bytes hash alike
+        h.update(hashlib.sha1(_read_bytes(part)).digest() if i < required or part.is_file() else b"missing")
     return h.hexdigest()
 
 

@@ -16,9 +16,11 @@ them by texture coordinate or normal, drops unreferenced ones) and reads index 0
 from __future__ import annotations
 
 import io
+import json
 import os
 import warnings
 from pathlib import Path
+from urllib.parse import unquote
 
 import numpy as np
 
@@ -40,8 +42,8 @@ def load_mesh(path: str | os.PathLike) -> Mesh:
 
     Polygons with more than three corners are split into triangles (fan). STL stores every
     triangle with its own three corners: it is read as that triangle soup (three vertices per
-    face, nothing welded); ``--repair`` welds it. glTF: see :func:`_read_gltf`. The mesh is checked by :func:`check_mesh`;
-    nothing is repaired or dropped here.
+    face, nothing welded); ``--repair`` welds it. glTF: see :func:`_read_gltf`. The mesh is
+    checked by :func:`check_mesh`; nothing is repaired or dropped here.
 
     Raises:
         MeshError: missing or unreadable file, unknown extension, malformed content, points
@@ -70,23 +72,19 @@ def load_mesh(path: str | os.PathLike) -> Mesh:
 
 def mesh_file_parts(path: str | os.PathLike) -> list[Path]:
     """The files a mesh is read from: ``path``, and beside it TOSCA's other half (``.vert`` and
-    ``.tri``, in that order) or the buffers a ``.gltf`` file names (its geometry lives there; an
-    unreadable ``.gltf`` names none, and loading says why)."""
+    ``.tri``, in that order) or the buffer files a ``.gltf`` file names (its geometry lives
+    there; a ``.gltf`` that does not parse, or names a buffer that is no file of its folder, is
+    refused when loaded, and here names none)."""
     path = Path(path)
     ext = path.suffix.lower()
     if ext in (".vert", ".tri"):
         return [path.with_suffix(".vert"), path.with_suffix(".tri")]
     if ext != ".gltf" or not path.is_file():
         return [path]
-    import json
-    from urllib.parse import unquote
-
     try:
-        document = json.loads(path.read_bytes())
-        uris = [buffer.get("uri") for buffer in document.get("buffers", [])]
-    except (OSError, ValueError, AttributeError, TypeError):
+        return [path] + _gltf_buffer_files(path, _gltf_document(path.read_bytes(), path))
+    except (OSError, MeshError):
         return [path]
-    return [path] + [path.parent / unquote(uri) for uri in uris if isinstance(uri, str) and not uri.startswith("data:")]
 
 
 def _read_bytes(path: Path) -> bytes:
@@ -547,12 +545,19 @@ def _read_gltf(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     import trimesh  # here: importing trimesh takes half a second
 
     fmt = path.suffix.lower()[1:]
-    missing = [part.name for part in mesh_file_parts(path)[1:] if not part.is_file()]
-    if missing:
-        raise MeshError(path, f"its buffer {missing[0]} is missing (a .gltf file keeps its geometry in the files "
-                              f"it names, beside it)")
+    resolver = None
+    if fmt == "gltf":
+        missing = [part.name for part in _gltf_buffer_files(path, _gltf_document(data, path)) if not part.is_file()]
+        if missing:
+            raise MeshError(path, f"its buffer {missing[0]} is missing (a .gltf file keeps its geometry in the files "
+                                  f"it names, beside it)")
+
+        class Folder(trimesh.resolvers.FilePathResolver):
+            def get(self, name):  # a glTF's URIs are percent-encoded; trimesh opens them as written
+                return super().get(unquote(name))
+
+        resolver = Folder(path.parent)
     try:
-        resolver = trimesh.resolvers.FilePathResolver(path.parent) if fmt == "gltf" else None
         loaded = trimesh.load(io.BytesIO(data), file_type=fmt, force="mesh", process=False, resolver=resolver)
     except Exception as exc:  # a third-party parser raises whatever it trips on
         detail = " ".join(str(exc).split())[:160] or type(exc).__name__
@@ -561,6 +566,40 @@ def _read_gltf(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     if len(faces) == 0:
         raise MeshError(path, "no triangles (a glTF scene without meshes, or of points and lines only)")
     return np.asarray(loaded.vertices, dtype=np.float64).reshape(-1, 3), faces
+
+
+def _gltf_document(data: bytes, path: Path) -> dict:
+    """The JSON object of a ``.gltf`` file; MeshError when it is none."""
+    try:
+        document = json.loads(data)
+    except ValueError as exc:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+        detail = " ".join(str(exc).split())[:120]
+        raise MeshError(path, f"not a glTF file: its JSON does not parse ({detail})") from None
+    if not isinstance(document, dict):
+        raise MeshError(path, "not a glTF file: its JSON is not an object")
+    return document
+
+
+def _gltf_buffer_files(path: Path, document: dict) -> list[Path]:
+    """The files that a ``.gltf`` file's buffers name (percent-decoded, beside it; a ``data:`` URI
+    embeds its bytes). MeshError for a buffer that names no file of its folder: an empty name, a
+    URL, a path that leads out of the folder."""
+    folder = path.parent.resolve()
+    buffers = document.get("buffers", [])
+    files = []
+    for buffer in buffers if isinstance(buffers, list) else []:
+        uri = buffer.get("uri") if isinstance(buffer, dict) else None
+        if uri is None or (isinstance(uri, str) and uri.startswith("data:")):
+            continue
+        if not isinstance(uri, str) or not uri.strip():
+            raise MeshError(path, f"a buffer's uri is {uri!r}: it names no file")
+        if "://" in uri:
+            raise MeshError(path, f"its buffer {uri} is not a local file: only files beside it are read")
+        part = path.parent / unquote(uri)
+        if not part.resolve().is_relative_to(folder):
+            raise MeshError(path, f"its buffer {uri} lies outside its folder: only files beside it are read")
+        files.append(part)
+    return files
 
 
 def _read_xyz(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
