@@ -72,6 +72,14 @@ def test_classes_pairs_and_dataset_errors(tmp_path, figures):
         read_pairs(pairs, dataset)
     with pytest.raises(DarcyanError, match="no meshes"):
         discover_dataset(tmp_path)
+    import trimesh  # a folder of glTF files is a dataset too
+
+    glb = tmp_path / "glb"
+    glb.mkdir()
+    for pose in (0, 1):
+        mesh = synthetic.figure(pose, subdivisions=2)
+        trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).export(glb / f"figure{pose}.glb")
+    assert discover_dataset(glb).classes == {"figure": ["figure0", "figure1"]}
     (tmp_path / "corres").mkdir()
     save_mesh(synthetic.icosphere(2), tmp_path / "ball0.off")
     (tmp_path / "corres" / "other.vts").write_text("1\n")

@@ -1,7 +1,7 @@
 """A dataset folder for ``darcyan bench``: its shapes, classes, ground truth and pairs.
 
-A dataset is a folder of meshes named ``{class}{pose}.off|.ply|.obj`` (the class is the name
-without its trailing digits). Ground truth comes from ``corres/{shape}.vts`` when that folder
+A dataset is a folder of meshes named ``{class}{pose}`` with a suffix of :data:`MESH_SUFFIXES`
+(the class is the name without its trailing digits). Ground truth comes from ``corres/{shape}.vts`` when that folder
 exists, else it is the identity on vertex indices within a class. Pairs are every ordered pair
 within a class, or the ``source<TAB>target[<TAB>group]`` lines of a pairs file.
 """
@@ -15,7 +15,7 @@ from pathlib import Path
 
 from ..errors import DarcyanError
 
-MESH_SUFFIXES = (".off", ".ply", ".obj")
+MESH_SUFFIXES = (".off", ".ply", ".obj", ".stl", ".glb", ".gltf")  # the formats load_mesh reads alone
 TRUTH_FOLDER = "corres"
 
 
