@@ -1,0 +1,38 @@
+"""The settings of a dense map (:class:`darcyan.dense.config.DenseConfig`): bad values are
+ConfigErrors."""
+
+import pytest
+
+from darcyan.dense.config import DenseConfig
+from darcyan.errors import ConfigError
+
+
+def test_dense_config_rejects_a_bad_commutativity():
+    for bad in (-1.0, float("nan"), True, "3"):
+        with pytest.raises(ConfigError, match="dense: commutativity must be non-negative"):
+            DenseConfig(commutativity=bad)
+
+
+def test_dense_config_rejects_a_bad_margin():
+    for bad in (dict(basis_margin=-1), dict(margin_from=2.5), dict(basis_margin="10")):
+        with pytest.raises(ConfigError, match=f"dense: {next(iter(bad))} must be a non-negative integer"):
+            DenseConfig(**bad)
+
+
+def test_dense_config_rejects_bad_seed_settings():
+    with pytest.raises(ConfigError, match="candidates"):
+        DenseConfig(candidates=0)
+    with pytest.raises(ConfigError, match="signature_lengths"):
+        DenseConfig(signature_lengths=(0.1, -1))
+    with pytest.raises(ConfigError, match="trust_orientation"):
+        DenseConfig(trust_orientation=2)
+    with pytest.raises(ConfigError, match="signature_lengths"):
+        DenseConfig(signature_lengths=(True,))
+    with pytest.raises(ConfigError, match="seed_margin"):
+        DenseConfig(seed_margin=1.0)
+    assert DenseConfig(signature_lengths=[0.1]).signature_lengths == (0.1,)
+
+
+def test_bad_sampling_is_a_config_error():
+    with pytest.raises(ConfigError, match="sampling"):
+        DenseConfig(sampling="poisson")

@@ -1,0 +1,260 @@
+"""Dense maps end to end: :func:`darcyan.dense.maps.dense_map` on the figure and on people, its
+numbering, its command line."""
+
+import csv
+import dataclasses
+import io
+import warnings
+
+import numpy as np
+import pytest
+from conftest import DENSE_MAX_MEAN, DENSE_MIN_RATE, DENSE_SCORED, FAST_DENSE, faust_pair, tip_correspondence
+
+from darcyan import DarcyanConfig
+from darcyan.cli import main
+from darcyan.dense.config import DenseConfig
+from darcyan.dense.maps import UNMAPPED, dense_map, dense_map_to_csv
+from darcyan.errors import ConfigError, DarcyanError
+from darcyan.eval.dense_scores import evaluate_dense
+from darcyan.eval.metrics import GroundTruth
+from darcyan.geometry import synthetic
+from darcyan.geometry.mesh import Mesh
+from darcyan.io.mesh_files import load_mesh, save_mesh
+from darcyan.method.pipeline import analyze_mesh, match_shapes
+
+
+@pytest.mark.slow
+def test_dense_map_on_the_figure_is_mostly_within_the_threshold(figure_pair):
+    shape_1, shape_2, matches = figure_pair
+    result = dense_map(shape_1, shape_2, matches, FAST_DENSE)
+    n = synthetic.figure(0).n_vertices
+    assert result.target.shape == (n,) and result.target.dtype == np.int64
+    assert result.target.min() >= 0 and result.target.max() < n
+    assert len(result.landmarks) >= 3 and set(result.timings) == {"landmarks", "basis", "zoomout"}
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED, target_solver=shape_2.solver)
+    assert len(score.errors) == DENSE_SCORED
+    assert score.rate >= DENSE_MIN_RATE and score.mean <= DENSE_MAX_MEAN
+    assert score.curve()[-1] == 1.0  # every sampled vertex lands within 0.25 sqrt(area)
+
+
+def test_a_wrong_match_is_left_out_of_the_landmarks(figure_pair):
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    wrong_target = np.concatenate([tips, [tips[0]]])  # a sixth match: tip 3 -> tip 0
+    wrong_source = np.concatenate([tips, [tips[3]]])
+    result = dense_map(shape_1, shape_2, tip_correspondence(wrong_source, wrong_target), FAST_DENSE)
+    assert sorted(map(tuple, result.landmarks.tolist())) == sorted(zip(tips.tolist(), tips.tolist()))
+
+
+@pytest.mark.slow
+def test_landmarks_decide_the_map(figure_pair):
+    """Matching every tip to the wrong tip gives a wrong map: the landmarks are what it follows."""
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    rolled = tip_correspondence(tips, np.roll(tips, 1))
+    result = dense_map(shape_1, shape_2, rolled, dataclasses.replace(FAST_DENSE, landmarks="all"))
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED, target_solver=shape_2.solver)
+    assert score.rate < 0.5
+
+
+@pytest.mark.slow
+def test_input_numbering_and_left_out_vertices():
+    """A renumbered target and a source with a stray component: the map speaks the files' numbering."""
+    config = DarcyanConfig()
+    pose_0, pose_1 = synthetic.figure(0), synthetic.figure(1)
+    n = pose_0.n_vertices
+    # Source: the figure plus a small tetrahedron far away (left out by preparation).
+    tet_v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float) * 0.1 + 10.0
+    tet_f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]) + n
+    source = Mesh(np.vstack([pose_0.vertices, tet_v]), np.vstack([pose_0.faces, tet_f]), "figure+tet")
+    # Target: pose 1 with its vertices renumbered: new vertex i is old vertex perm[i].
+    perm = np.random.default_rng(3).permutation(n)
+    new_index = np.argsort(perm)
+    target = Mesh(pose_1.vertices[perm], new_index[pose_1.faces], "figure1-renumbered")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        shape_1 = analyze_mesh(source, config)
+    shape_2 = analyze_mesh(target, config)
+    result = dense_map(shape_1, shape_2, match_shapes(shape_1, shape_2, config), FAST_DENSE)
+    assert result.target.shape == (n + 4,)
+    assert np.all(result.target[n:] == UNMAPPED) and np.all(result.target[:n] >= 0)
+    truth = GroundTruth(np.arange(n), new_index)  # source vertex v is target vertex new_index[v]
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, truth, sample=DENSE_SCORED,
+                           target_solver=shape_2.solver)
+    assert score.rate >= DENSE_MIN_RATE and score.mean <= DENSE_MAX_MEAN
+    # Read in the wrong numbering, the same map is mostly wrong: the test can tell.
+    wrong = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, GroundTruth(), sample=DENSE_SCORED,
+                           target_solver=shape_2.solver)
+    assert wrong.rate < 0.2
+
+
+@pytest.mark.slow
+def test_a_renumbered_target_gets_the_same_map(figure_pair):
+    """Farthest-point ZoomOut samples depend on where the vertices are, not on their numbering:
+    the map to a renumbered copy of the target is the map to the target, renumbered (a random
+    draw of samples changes a fifth of it)."""
+    config = DarcyanConfig()
+    shape_1, shape_2, matches = figure_pair
+    pose_1 = synthetic.figure(1)
+    perm = np.random.default_rng(3).permutation(pose_1.n_vertices)  # new vertex i is old vertex perm[i]
+    renumbered = analyze_mesh(Mesh(pose_1.vertices[perm], np.argsort(perm)[pose_1.faces], "figure1-renumbered"),
+                              config)
+    renumbered_matches = match_shapes(shape_1, renumbered, config)
+    assert np.array_equal(perm[renumbered_matches.target_vertex], matches.target_vertex)
+    agreement = {}
+    for sampling in ("farthest", "random"):
+        dense = dataclasses.replace(FAST_DENSE, sampling=sampling)
+        direct = dense_map(shape_1, shape_2, matches, dense).target
+        agreement[sampling] = float((perm[dense_map(shape_1, renumbered, renumbered_matches, dense).target]
+                                     == direct).mean())
+    assert agreement["farthest"] >= 0.99 and agreement["random"] < 0.95, agreement
+
+
+def test_evaluate_dense_identity_and_shift(figure_pair):
+    shape_1, shape_2, _ = figure_pair
+    n = shape_1.n_input_vertices
+    exact = evaluate_dense(shape_1.mesh, shape_2.mesh, np.arange(n), sample=50, target_solver=shape_2.solver)
+    assert exact.rate == 1.0 and exact.mean == 0.0
+    again = evaluate_dense(shape_1.mesh, shape_2.mesh, np.arange(n), sample=50, target_solver=shape_2.solver)
+    assert np.array_equal(exact.source_vertices, again.source_vertices)  # a fixed sample
+    far = np.full(n, int(synthetic.figure_tips()[0]))  # everything to one tip
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, far, sample=50, target_solver=shape_2.solver)
+    assert score.rate < 0.2 and score.mean > 0.1
+
+
+def test_errors_name_the_problem(figure_pair):
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    with pytest.raises(DarcyanError, match="at least 3"):
+        dense_map(shape_1, shape_2, tip_correspondence(tips[:2], tips[:2]), FAST_DENSE)
+    record = dataclasses.replace(shape_1.description, name="cached.off")  # as read from the cache
+    with pytest.raises(DarcyanError, match="cached.off.*prepared shapes"):
+        dense_map(record, shape_2, tip_correspondence(tips, tips), FAST_DENSE)
+    with pytest.raises(ConfigError, match="landmarks"):
+        DenseConfig(landmarks="some")
+    with pytest.raises(ConfigError, match="basis_start"):
+        DenseConfig(basis_start=50, basis_size=20)
+
+
+def test_dense_csv_format():
+    assert dense_map_to_csv(np.array([2, 0, -1])) == "source_vertex,target_vertex\n0,2\n1,0\n2,-1\n"
+
+
+@pytest.mark.slow
+def test_cli_dense_writes_one_row_per_source_vertex(small_pose_files, tmp_path, capsys):
+    out_file = tmp_path / "map.csv"
+    code = main(["match", *map(str, small_pose_files), "--dense", "-o", str(out_file)])
+    assert code == 0
+    rows = list(csv.DictReader(io.StringIO(out_file.read_text())))
+    n = synthetic.figure(0, subdivisions=4).n_vertices
+    assert list(rows[0]) == ["source_vertex", "target_vertex"] and len(rows) == n
+    source = np.array([int(r["source_vertex"]) for r in rows])
+    target = np.array([int(r["target_vertex"]) for r in rows])
+    assert np.array_equal(source, np.arange(n)) and target.min() >= 0 and target.max() < n
+    # Pose 0 -> 1 shares the numbering: the map is mostly right (identity truth).
+    shape_1, shape_2 = (analyze_mesh(synthetic.figure(p, subdivisions=4), DarcyanConfig()) for p in (0, 1))
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, target, sample=DENSE_SCORED, target_solver=shape_2.solver)
+    assert score.rate >= DENSE_MIN_RATE
+    # Without --dense, the sparse contract is unchanged.
+    assert main(["match", *map(str, small_pose_files), "--no-cache"]) == 0
+    assert capsys.readouterr().out.splitlines()[0] == "source_vertex,target_vertex,distance"
+
+
+def test_cli_dense_error_is_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.off"
+    bad.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n")
+    assert main(["match", str(bad), str(bad), "--dense"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("darcyan: error:") and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.slow
+def test_pyfm_method_with_darcyan_landmarks():
+    """Approach (a): pyFM's functional map with the matches as landmarks, refined by its ZoomOut.
+
+    Measured on the 2,562-vertex figure, pose 0 -> 1: 1.000 within 0.05, mean error 0.0024."""
+    pytest.importorskip("pyFM", reason="pyfmaps is not installed (pip install 'darcyan[pyfm]')")
+    config = DarcyanConfig()
+    shape_1, shape_2 = (analyze_mesh(synthetic.figure(p, subdivisions=4), config) for p in (0, 1))
+    result = dense_map(shape_1, shape_2, match_shapes(shape_1, shape_2, config), DenseConfig(method="pyfm"))
+    assert result.target.shape == (shape_1.n_input_vertices,) and "pyfm" in result.timings
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED, target_solver=shape_2.solver)
+    assert score.rate >= DENSE_MIN_RATE and score.mean <= DENSE_MAX_MEAN
+
+
+@pytest.mark.slow
+def test_a_person_front_and_back_are_not_swapped(faust):
+    # FAUST person 2, poses 3 -> 8: with distances to the five landmarks alone the dense map put
+    # the front of the body on its back over a third of it (0.42 of the vertices within 0.05,
+    # orientation check -0.5); the turns between landmarks hold it (0.97, check > 0.8), and so do
+    # the turns from the landmark directions to the curvature's alone (a reflection flips both).
+    shapes, correspondence, truth = faust_pair(faust, "tr_reg_023", "tr_reg_028")
+    distances_only = DenseConfig(orientation_weight=0, landmark_weight=0, signature_turns=0)
+    maps = {"turns": dense_map(*shapes, correspondence),
+            "distances only": dense_map(*shapes, correspondence, distances_only),
+            "signature turns": dense_map(*shapes, correspondence,
+                                         dataclasses.replace(distances_only, signature_turns=2.0))}
+    scores = {name: evaluate_dense(shapes[0].mesh, shapes[1].mesh, m.target, truth, target_solver=shapes[1].solver)
+              for name, m in maps.items()}
+    assert scores["turns"].rate >= 0.9 and scores["turns"].mean <= 0.025
+    assert maps["turns"].check["orientation"] > 0.7
+    assert scores["signature turns"].rate >= 0.9
+    # the check sees the flip of the distances-only map
+    assert scores["distances only"].rate < 0.6 and maps["distances only"].check["orientation"] < 0
+
+
+@pytest.mark.slow
+def test_an_ensemble_maps_the_figure_at_least_as_well_as_one_run(figure_pair):
+    shape_1, shape_2, matches = figure_pair
+    one = dense_map(shape_1, shape_2, matches, FAST_DENSE)
+    three = dense_map(shape_1, shape_2, matches, dataclasses.replace(FAST_DENSE, ensemble=3))
+    scores = [evaluate_dense(shape_1.mesh, shape_2.mesh, m.target, sample=DENSE_SCORED, target_solver=shape_2.solver)
+              for m in (one, three)]
+    assert scores[1].rate >= DENSE_MIN_RATE and scores[1].mean <= DENSE_MAX_MEAN
+    assert scores[1].mean <= scores[0].mean * 1.05
+    assert not np.array_equal(one.target, three.target)  # the other members took part
+    # Fewer than three members, or every vertex in each run: one run, the same map byte for byte.
+    two = dense_map(shape_1, shape_2, matches, dataclasses.replace(FAST_DENSE, ensemble=2))
+    assert np.array_equal(two.target, one.target)
+    everywhere = dataclasses.replace(FAST_DENSE, zoomout_samples=0, basis_size=20)
+    assert np.array_equal(dense_map(shape_1, shape_2, matches, dataclasses.replace(everywhere, ensemble=3)).target,
+                          dense_map(shape_1, shape_2, matches, everywhere).target)
+
+
+def test_cli_ensemble_is_checked_before_any_work(small_pose_files, tmp_path, monkeypatch, capsys):
+    import darcyan.method.pipeline as pipeline
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("shapes described before the options were checked")
+
+    monkeypatch.setattr(pipeline, "describe_shapes", no_work)
+    folder = tmp_path / "maps"
+    assert main(["match", *map(str, small_pose_files), str(small_pose_files[1]), "--dense", "--ensemble", "0",
+                 "-o", str(folder)]) != 0
+    assert not folder.exists()
+    capsys.readouterr()
+    assert main(["match", *map(str, small_pose_files), "--dense", "--ensemble", "0", "--no-cache"]) != 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--ensemble" in err[0] and "ensemble must be a positive integer" in err[0]
+    assert main(["match", *map(str, small_pose_files), "--ensemble", "3", "--no-cache"]) != 0
+    assert "--dense maps only" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_cli_farthest_sampling_maps_a_renumbered_file_alike(small_pose_files, tmp_path, capsys):
+    source, target = small_pose_files
+    pose_1 = load_mesh(target)
+    perm = np.random.default_rng(8).permutation(pose_1.n_vertices)  # renumbered vertex i is vertex perm[i]
+    renumbered = tmp_path / "figure1-renumbered.off"
+    save_mesh(Mesh(pose_1.vertices[perm], np.argsort(perm)[pose_1.faces]), renumbered)
+    maps = []
+    for path in (target, renumbered):
+        out = tmp_path / f"{path.stem}.csv"
+        assert main(["match", str(source), str(path), "--dense", "--sampling", "farthest", "-o", str(out),
+                     "--quiet"]) == 0
+        maps.append(np.loadtxt(out, delimiter=",", skiprows=1, dtype=np.int64)[:, 1])
+    assert np.array_equal(perm[maps[1]], maps[0])
+    capsys.readouterr()
+    assert main(["match", str(source), str(target), "--sampling", "farthest", "--no-cache"]) != 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--sampling applies to --dense maps only" in err[0]

@@ -1,0 +1,44 @@
+"""The curvature signature of a dense map (:mod:`darcyan.dense.signatures`)."""
+
+import numpy as np
+import pytest
+from conftest import moved_and_mirrored_tip_fields
+
+from darcyan.dense.config import DenseConfig
+from darcyan.errors import ConfigError
+
+
+def test_signature_turns_flip_in_a_mirror_stay_under_rigid_motion_and_scale_with_the_weight(figure_poses):
+    from darcyan.dense.signatures import point_signature, signature_turn_coordinates
+
+    turns = {}
+    for name, shape, fields in moved_and_mirrored_tip_fields(figure_poses[0], seed=4):
+        turns[name] = signature_turn_coordinates(shape, shape, DenseConfig(signature_turns=2.0), fields, fields)[0]
+        if name == "as is":
+            once = signature_turn_coordinates(shape, shape, DenseConfig(signature_turns=1.0), fields, fields)[0]
+            assert turns[name].shape == (shape.n_vertices, 3 * len(point_signature(shape, DenseConfig())[0]))
+            assert np.allclose(turns[name], 2.0 * once)
+            assert signature_turn_coordinates(shape, shape, DenseConfig(signature_turns=0), fields, fields) == (None, None)
+    assert np.abs(turns["as is"]).max() > 0.5  # not vacuous: the turns are not all zero
+    assert np.allclose(turns["moved"], turns["as is"], atol=1e-6)
+    assert np.allclose(turns["mirrored"], -turns["as is"], atol=1e-6)
+    with pytest.raises(ConfigError, match="signature_turns"):
+        DenseConfig(signature_turns=-1)
+
+
+def test_signature_coordinates_have_the_configured_spread(figure_poses):
+    from darcyan.dense.signatures import point_signature, signature_coordinates
+    from darcyan.geometry.shape import prepare_shape
+
+    shape_1, shape_2 = (prepare_shape(mesh) for mesh in figure_poses[:2])
+    everywhere = np.arange(shape_1.n_vertices), np.arange(shape_2.n_vertices)
+    config = DenseConfig(signature_weight=2.0)
+    coarse_1, coarse_2 = signature_coordinates(shape_1, shape_2, config, *everywhere)
+    assert np.allclose(np.concatenate([coarse_1, coarse_2]).std(axis=0), 2.0)
+    ratio = coarse_1 / point_signature(shape_1, config)  # each length scaled by one number
+    assert np.allclose(ratio, ratio[0], rtol=1e-9)
+    assert signature_coordinates(shape_1, shape_2, DenseConfig(signature_weight=0), *everywhere) == (None, None)
+    with pytest.raises(ConfigError, match="signature_weight"):
+        DenseConfig(signature_weight=-1)
+    with pytest.raises(ConfigError, match="signature_until"):
+        DenseConfig(signature_until=-1)
