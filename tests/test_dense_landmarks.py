@@ -70,6 +70,20 @@ def test_orientation_coordinates_are_the_area_weighted_sines_of_numpys_cross_pro
                               orientation_coordinates(types.SimpleNamespace(mesh=shape.mesh), fields, extra))
 
 
+def test_orientation_coordinates_by_blocks_of_faces_are_the_same_bits(figure_poses, monkeypatch):
+    import darcyan.dense.landmarks as landmarks
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(figure_poses[0])
+    fields = np.stack([shape.solver.distance(v) for v in (0, 500, 1000)], axis=1)
+    others = np.stack([shape.mesh.vertices[:, 0] ** 2, shape.mesh.vertices[:, 1]], axis=1)
+    assert shape.mesh.n_faces < landmarks.FACE_BLOCK  # one block
+    whole = [landmarks.orientation_coordinates(shape, fields, extra) for extra in (None, others)]
+    monkeypatch.setattr(landmarks, "FACE_BLOCK", 777)  # many blocks, the last one short
+    for extra, expected in zip((None, others), whole):
+        assert np.array_equal(landmarks.orientation_coordinates(shape, fields, extra), expected)
+
+
 def test_orientation_coordinates_on_a_plane_are_the_sine_between_the_landmark_directions():
     # On a plane the distance to a point grows along the direction away from it, so the turn from
     # landmark a's gradient to landmark b's about the normal is sin of the angle between x - a and

@@ -67,3 +67,21 @@ def test_nearest_rows_near_equals_the_full_search_on_a_smooth_surface_embedding(
     assert np.mean(found == expected) >= 0.995
     # only the nearest sample's own cell: it misses (measured 0.86), the test can fail
     assert np.mean(nearest_rows_near(reference, queries, points, coarse, 1) == expected) < 0.9
+
+
+def test_nearest_rows_near_by_blocks_of_queries_equals_one_product(sphere, monkeypatch):
+    # Many queries share a nearest sample (all near one point): searched by blocks of queries,
+    # each must get the row that one product over all of them gives, in single as in double precision.
+    import darcyan.geometry.knn as knn
+
+    rng = np.random.default_rng(2)
+    points = sphere.vertices
+    reference = np.hstack([points, np.sin(points), points**2])
+    queries = reference[rng.choice(len(points), 5)].repeat(300, axis=0) + rng.normal(scale=0.05, size=(1500, 9))
+    coarse = np.sort(rng.choice(len(points), 50, replace=False))
+    assert np.bincount(knn.nearest_rows(reference[coarse], queries)).max() > knn.NN_BLOCK_ROWS
+    blocked = knn.nearest_rows_near(reference, queries, points, coarse, 4)
+    assert np.array_equal(knn.nearest_rows_near(reference.astype(np.float32), queries.astype(np.float32), points,
+                                                coarse, 4), blocked)
+    monkeypatch.setattr(knn, "NN_BLOCK_ROWS", 10**9)
+    assert np.array_equal(knn.nearest_rows_near(reference, queries, points, coarse, 4), blocked)

@@ -153,12 +153,14 @@ class _Fitter:
 
 def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.ndarray,
                    config: "DenseConfig", f_a: np.ndarray | None = None, f_b: np.ndarray | None = None,
-                   g_a: np.ndarray | None = None, g_b: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                   g_a: np.ndarray | None = None, g_b: np.ndarray | None = None,
+                   dtype=np.float64) -> tuple[np.ndarray, np.ndarray]:
     """Query rows on shape a and reference rows on shape b whose nearest neighbours give the map
     a -> b minimizing coupling, bijectivity and orthogonality residuals (and, with ``f_a (s_a,
     c)``, ``f_b (s_b, c)`` the landmark coordinates, their difference weighed by
     ``config.landmark_weight``; with ``g_a (s_a, d)``, ``g_b (s_b, d)``, those coordinates as they
-    are): ``nearest_rows(references, queries)`` is the vertex map.
+    are): ``nearest_rows(references, queries)`` is the vertex map. ``dtype``: of the rows
+    returned (each term computed in double precision, then converted).
 
     ``c_ab (p, k)`` (p >= k: see ``DenseConfig.basis_margin``) pulls b's first k coefficients
     back to a's first p (``b_a[:, :p] C_ab ~ b_b[map, :k]``), ``c_ba (p, k)`` the reverse; the
@@ -186,7 +188,8 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
     if g_a is not None:
         queries.append(g_a)
         references.append(g_b)
-    return np.hstack(queries), np.hstack(references)
+    return (np.hstack([np.asarray(part, dtype) for part in queries]),
+            np.hstack([np.asarray(part, dtype) for part in references]))
 
 
 def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21: np.ndarray,
@@ -255,7 +258,9 @@ def read_out_map(shape_2, basis_1: np.ndarray, basis_2: np.ndarray, c_12: np.nda
     weighted signature turns, when given); a target mesh of more than
     ``config.local_search_above`` vertices is searched near each image's nearest ZoomOut sample
     (``sample_2``, see :func:`darcyan.geometry.knn.nearest_rows_near`)."""
-    q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, steady_1, steady_2)
+    # Single precision, as the nearest-neighbour search reads them (half the memory of a large mesh's).
+    q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, steady_1, steady_2,
+                          dtype=np.float32)
     mesh_2 = shape_2.mesh
     if mesh_2.n_vertices > config.local_search_above and len(sample_2) < mesh_2.n_vertices:
         return nearest_rows_near(r, q, mesh_2.vertices, sample_2, config.local_search_reach)

@@ -83,23 +83,23 @@ def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
     """``(q,) int64``: for each row of ``queries (q, d)``, the nearest row of ``reference (n, d)``.
 
     A k-d tree in few dimensions; in many, brute force in single precision by blocks of queries
-    (memory ``block x n``, never ``q x n``).
+    (memory ``block x n`` beside the single-precision copies, never ``q x n``; single-precision
+    inputs are not copied).
     """
-    reference = np.ascontiguousarray(reference, dtype=np.float64)
-    queries = np.ascontiguousarray(queries, dtype=np.float64)
-    if reference.shape[1] <= KDTREE_MAX_DIM:
+    if np.shape(reference)[1] <= KDTREE_MAX_DIM:
         from scipy.spatial import cKDTree
 
-        return cKDTree(reference).query(queries)[1].astype(np.int64)
-    reference, queries = reference.astype(np.float32), queries.astype(np.float32)
+        reference = np.ascontiguousarray(reference, dtype=np.float64)
+        return cKDTree(reference).query(np.ascontiguousarray(queries, dtype=np.float64))[1].astype(np.int64)
+    reference, queries = np.asarray(reference, dtype=np.float32), np.asarray(queries, dtype=np.float32)
     # One matrix product per block gives |r|^2 - 2 q.r directly: [-2 q, 1] @ [r, |r|^2]^T.
     right = np.vstack([reference.T, np.einsum("ij,ij->i", reference, reference)[None]])
-    left = np.hstack([-2.0 * queries, np.ones((len(queries), 1), np.float32)])
     block = np.empty((min(NN_BLOCK_ROWS, len(queries)), len(reference)), np.float32)  # reused
     out = np.empty(len(queries), dtype=np.int64)
     for start in range(0, len(queries), NN_BLOCK_ROWS):
-        rows = left[start:start + NN_BLOCK_ROWS]
-        out[start:start + len(rows)] = np.matmul(rows, right, out=block[:len(rows)]).argmin(axis=1)
+        rows = queries[start:start + NN_BLOCK_ROWS]
+        left = np.hstack([-2.0 * rows, np.ones((len(rows), 1), np.float32)])
+        out[start:start + len(rows)] = np.matmul(left, right, out=block[:len(rows)]).argmin(axis=1)
     return out
 
 
@@ -133,8 +133,12 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
     by_query = np.argsort(nearest_sample, kind="stable")
     starts = np.searchsorted(nearest_sample[by_query], np.arange(len(coarse) + 1))
     for s in np.flatnonzero(np.diff(starts)):
-        rows = by_query[starts[s]:starts[s + 1]]
+        members = by_query[starts[s]:starts[s + 1]]
         candidates = np.concatenate([by_cell[bounds[c]:bounds[c + 1]] for c in around[s]])
-        scores = ref_sq[candidates][None, :] - 2.0 * (queries[rows] @ reference[candidates].T)
-        out[rows] = candidates[np.argmin(scores, axis=1)]
+        near, near_sq = reference[candidates], ref_sq[candidates]
+        # By blocks of queries: on a large mesh one sample can be the nearest of tens of thousands.
+        for start in range(0, len(members), NN_BLOCK_ROWS):
+            rows = members[start:start + NN_BLOCK_ROWS]
+            scores = near_sq[None, :] - 2.0 * (queries[rows] @ near.T)
+            out[rows] = candidates[np.argmin(scores, axis=1)]
     return out
