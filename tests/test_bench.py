@@ -14,7 +14,7 @@ from darcyan.errors import DarcyanError
 from darcyan.eval import baselines
 from darcyan.geometry import spectral, synthetic
 from darcyan.geometry.geodesics import GeodesicSolver
-from darcyan.geometry.mesh import normalize_mesh
+from darcyan.geometry.mesh import MeshWarning, normalize_mesh
 from darcyan.io.mesh_files import save_mesh
 from darcyan.method.matching import match_descriptors
 
@@ -80,6 +80,13 @@ def test_classes_pairs_and_dataset_errors(tmp_path, figures):
         mesh = synthetic.figure(pose, subdivisions=2)
         trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).export(glb / f"figure{pose}.glb")
     assert discover_dataset(glb).classes == {"figure": ["figure0", "figure1"]}
+    save_mesh(synthetic.figure(0, subdivisions=2), glb / "figure0.off")  # an .off beside its export
+    with pytest.warns(MeshWarning, match="figure0.glb left out: figure0.off is the mesh named figure0"):
+        assert discover_dataset(glb).shapes["figure0"].name == "figure0.off"
+    save_mesh(synthetic.figure(0, subdivisions=2), glb / "figure0.ply")
+    with pytest.warns(MeshWarning, match="figure0.glb left out"), pytest.raises(DarcyanError,
+                                                                                match="two meshes named figure0"):
+        discover_dataset(glb)
     (tmp_path / "corres").mkdir()
     save_mesh(synthetic.icosphere(2), tmp_path / "ball0.off")
     (tmp_path / "corres" / "other.vts").write_text("1\n")

@@ -79,9 +79,23 @@ def test_nearest_rows_near_by_blocks_of_queries_equals_one_product(sphere, monke
     reference = np.hstack([points, np.sin(points), points**2])
     queries = reference[rng.choice(len(points), 5)].repeat(300, axis=0) + rng.normal(scale=0.05, size=(1500, 9))
     coarse = np.sort(rng.choice(len(points), 50, replace=False))
-    assert np.bincount(knn.nearest_rows(reference[coarse], queries)).max() > knn.NN_BLOCK_ROWS
+    sizes = np.bincount(knn.nearest_rows(reference[coarse], queries))
+    assert sizes.max() > knn.NN_BLOCK_ROWS
     blocked = knn.nearest_rows_near(reference, queries, points, coarse, 4)
-    assert np.array_equal(knn.nearest_rows_near(reference.astype(np.float32), queries.astype(np.float32), points,
-                                                coarse, 4), blocked)
+    # A sample with one query more than a block: a one-row block would be BLAS's gemv, whose
+    # last bits differ from a product of many rows; the row goes with the block before it.
+    one_more = queries[:knn.NN_BLOCK_ROWS + 1]
+    assert len(set(knn.nearest_rows(reference[coarse], one_more))) == 1
+    tail = knn.nearest_rows_near(reference, one_more, points, coarse, 4)
     monkeypatch.setattr(knn, "NN_BLOCK_ROWS", 10**9)
     assert np.array_equal(knn.nearest_rows_near(reference, queries, points, coarse, 4), blocked)
+    assert np.array_equal(knn.nearest_rows_near(reference, one_more, points, coarse, 4), tail)
+
+
+def test_nearest_rows_takes_any_layout_of_single_precision_rows():
+    rng = np.random.default_rng(5)
+    reference, queries = rng.normal(size=(300, 12)), rng.normal(size=(100, 12))
+    expected = nearest_rows(reference, queries)
+    fortran = np.asfortranarray(reference.astype(np.float32))
+    columns = np.hstack([queries, queries]).astype(np.float32)[:, :12]  # a strided view
+    assert np.array_equal(nearest_rows(fortran, columns), expected)

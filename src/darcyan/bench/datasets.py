@@ -10,12 +10,17 @@ from __future__ import annotations
 
 import os
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import DarcyanError
+from ..geometry.mesh import MeshWarning
 
 MESH_SUFFIXES = (".off", ".ply", ".obj", ".stl", ".glb", ".gltf")  # the formats load_mesh reads alone
+# A file of these formats named like another mesh of the folder is taken for a copy of it (an
+# export, a preview): left out with a warning, where two of the first three with one name are an error.
+SECONDARY_SUFFIXES = (".stl", ".glb", ".gltf")
 TRUTH_FOLDER = "corres"
 
 
@@ -53,7 +58,11 @@ def discover_dataset(root: str | os.PathLike) -> Dataset:
         if path.suffix.lower() not in MESH_SUFFIXES or not path.is_file():
             continue
         if path.stem in shapes:
-            raise DarcyanError(f"{root}: two meshes named {path.stem} ({shapes[path.stem].name}, {path.name})")
+            kept, other = sorted([shapes[path.stem], path], key=lambda p: MESH_SUFFIXES.index(p.suffix.lower()))
+            if other.suffix.lower() not in SECONDARY_SUFFIXES:
+                raise DarcyanError(f"{root}: two meshes named {path.stem} ({shapes[path.stem].name}, {path.name})")
+            warnings.warn(f"{root}: {other.name} left out: {kept.name} is the mesh named {path.stem}", MeshWarning)
+            path = kept
         shapes[path.stem] = path
     if not shapes:
         raise DarcyanError(f"{root}: no meshes ({', '.join(MESH_SUFFIXES)}) in this folder")

@@ -91,7 +91,8 @@ def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
 
         reference = np.ascontiguousarray(reference, dtype=np.float64)
         return cKDTree(reference).query(np.ascontiguousarray(queries, dtype=np.float64))[1].astype(np.int64)
-    reference, queries = np.asarray(reference, dtype=np.float32), np.asarray(queries, dtype=np.float32)
+    reference = np.ascontiguousarray(reference, dtype=np.float32)
+    queries = np.ascontiguousarray(queries, dtype=np.float32)
     # One matrix product per block gives |r|^2 - 2 q.r directly: [-2 q, 1] @ [r, |r|^2]^T.
     right = np.vstack([reference.T, np.einsum("ij,ij->i", reference, reference)[None]])
     block = np.empty((min(NN_BLOCK_ROWS, len(queries)), len(reference)), np.float32)  # reused
@@ -137,8 +138,12 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
         candidates = np.concatenate([by_cell[bounds[c]:bounds[c + 1]] for c in around[s]])
         near, near_sq = reference[candidates], ref_sq[candidates]
         # By blocks of queries: on a large mesh one sample can be the nearest of tens of thousands.
-        for start in range(0, len(members), NN_BLOCK_ROWS):
-            rows = members[start:start + NN_BLOCK_ROWS]
+        # Never a block of one row of several (a one-row product is BLAS's gemv, whose last bits differ).
+        firsts = list(range(0, len(members), NN_BLOCK_ROWS))
+        if len(firsts) > 1 and len(members) - firsts[-1] == 1:
+            firsts.pop()
+        for start, end in zip(firsts, firsts[1:] + [len(members)]):
+            rows = members[start:end]
             scores = near_sq[None, :] - 2.0 * (queries[rows] @ near.T)
             out[rows] = candidates[np.argmin(scores, axis=1)]
     return out
