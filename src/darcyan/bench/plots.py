@@ -54,13 +54,8 @@ def plot_group_curves(results: dict, path: Path) -> Path:
                     ax.plot(taus, np.asarray(g["curve"]) * 100, color=style.method_colour(name),
                             linestyle=GROUP_LINESTYLES[i % len(GROUP_LINESTYLES)],
                             label=f"{name}, {group} ({percent(g['rate'])})")
-            ax.axvline(results["threshold"], color=style.NEUTRAL["edge"], linewidth=0.8, linestyle=":")
-            ax.set_xlim(taus[0], taus[-1])
-            ax.set_ylim(0, 100)
-            ax.set_xlabel("geodesic error / sqrt(area)")
-            ax.set_ylabel(f"{what} with error <= threshold (%)")
-            ax.set_title(f"{Path(results['dataset']).name}: {title} per group")
-            ax.legend(fontsize="small", loc="lower right")
+            _curve_axes(ax, results, taus, f"{what} with error <= threshold (%)",
+                        f"{Path(results['dataset']).name}: {title} per group")
         style.save(fig, path)
     return path
 
@@ -106,13 +101,8 @@ def plot_curves(results: dict, path: Path) -> Path:
             ax.plot(taus, np.asarray(m["overall"]["curve"]) * 100, color=colour, label=name)
             ax.plot(taus, np.asarray(m["overall"]["curve_sym"]) * 100, color=colour, linestyle="--",
                     label=f"{name} (with flips)")
-        ax.axvline(results["threshold"], color=style.NEUTRAL["edge"], linewidth=0.8, linestyle=":")
-        ax.set_xlim(taus[0], taus[-1])
-        ax.set_ylim(0, 100)
-        ax.set_xlabel("geodesic error / sqrt(area)")
-        ax.set_ylabel("matches with error <= threshold (%)")
-        ax.set_title(f"{Path(results['dataset']).name}: cumulative error")
-        ax.legend(fontsize="small", loc="lower right")
+        _curve_axes(ax, results, taus, "matches with error <= threshold (%)",
+                    f"{Path(results['dataset']).name}: cumulative error")
         style.save(fig, path)
     return path
 
@@ -130,13 +120,22 @@ def plot_dense_curves(results: dict, path: Path) -> Path:
             o = m["overall"]
             ax.plot(taus, np.asarray(o["curve"]) * 100, color=style.method_colour(name),
                     label=f"{name} ({percent(o['rate'])} within {results['threshold']}, {o['pairs']} pairs)")
-        ax.axvline(results["threshold"], color=style.NEUTRAL["edge"], linewidth=0.8, linestyle=":")
-        ax.set_xlim(taus[0], taus[-1])
-        ax.set_ylim(0, 100)
-        ax.set_xlabel("geodesic error / sqrt(area)")
-        ax.set_ylabel("sampled source vertices with error <= threshold (%)")
-        ax.set_title(f"{Path(results['dataset']).name}: dense maps, cumulative error"
-                     + (f" ({samples} vertices per pair)" if samples else ""))
-        ax.legend(fontsize="small", loc="lower right")
+        _curve_axes(ax, results, taus, "sampled source vertices with error <= threshold (%)",
+                    f"{Path(results['dataset']).name}: dense maps, cumulative error"
+                    + (f" ({samples} vertices per pair)" if samples else ""))
         style.save(fig, path)
     return path
+
+
+def _curve_axes(ax, results: dict, taus: np.ndarray, ylabel: str, title: str) -> None:
+    """What every cumulative-error panel shares: the threshold's line, the axes' ranges and
+    labels, the title and the legend."""
+    from ..viz import style
+
+    ax.axvline(results["threshold"], color=style.NEUTRAL["edge"], linewidth=0.8, linestyle=":")
+    ax.set_xlim(taus[0], taus[-1])
+    ax.set_ylim(0, 100)
+    ax.set_xlabel("geodesic error / sqrt(area)")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(fontsize="small", loc="lower right")
