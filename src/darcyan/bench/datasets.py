@@ -1,9 +1,10 @@
 """A dataset folder for ``darcyan bench``: its shapes, classes, ground truth and pairs.
 
 A dataset is a folder of meshes named ``{class}{pose}`` with a suffix of :data:`MESH_SUFFIXES`
-(the class is the name without its trailing digits). Ground truth comes from ``corres/{shape}.vts`` when that folder
-exists, else it is the identity on vertex indices within a class. Pairs are every ordered pair
-within a class, or the ``source<TAB>target[<TAB>group]`` lines of a pairs file.
+(the class is the name without its trailing digits). Ground truth comes from
+``corres/{shape}.vts`` when that folder exists, else it is the identity on vertex indices within
+a class. Pairs are every ordered pair within a class, or the ``source<TAB>target[<TAB>group]``
+lines of a pairs file.
 """
 
 from __future__ import annotations

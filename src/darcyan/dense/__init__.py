@@ -1,6 +1,10 @@
 """Dense maps seeded by the sparse matches: :func:`dense_map` and its configuration,
 :func:`verified_matches` (the seed a dense map would choose, as sparse matches) and
-:func:`seed_scores` (the scores it chooses by)."""
+:func:`seed_scores` (the scores it chooses by).
+
+Modules: ``maps`` (:func:`dense_map`, which puts the parts together), ``config``
+(:class:`DenseConfig`), ``landmarks``, ``seeds``, ``signatures``, ``zoomout``, ``verify`` (a
+verification kept per pair of files) and ``pyfm`` (pyFM's pipeline)."""
 
 from .config import DenseConfig
 from .landmarks import consistent_landmarks

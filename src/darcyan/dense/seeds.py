@@ -1,8 +1,9 @@
 """The seed of a dense map: which matching (the sparse one or an alternative) it starts from.
 
 The sparse matching competes with the alternatives the sparse stage weighed
-(``Correspondence.alternatives``): each is turned into landmarks (:func:`~darcyan.dense.landmarks.landmark_set`) and
-seeds a short ZoomOut, and the one whose map best keeps the curvature signature
+(``Correspondence.alternatives``): each is turned into landmarks
+(:func:`~darcyan.dense.landmarks.landmark_set`) and seeds a short ZoomOut, and the one whose map
+best keeps the curvature signature
 (:func:`~darcyan.dense.signatures.point_signature`) seeds the dense map. A mirrored seed keeps
 every distance and, with the orientation coordinates, turns the body round, front onto back,
 which the curvature of a face or a chest shows. :func:`verified_matches` gives that choice as
