@@ -258,12 +258,10 @@ def read_out_map(shape_2, basis_1: np.ndarray, basis_2: np.ndarray, c_12: np.nda
     weighted signature turns, when given); a target mesh of more than
     ``config.local_search_above`` vertices is searched near each image's nearest ZoomOut sample
     (``sample_2``, see :func:`darcyan.geometry.knn.nearest_rows_near`)."""
-    # Single precision, as the nearest-neighbour search reads them (half the memory of a large
-    # mesh's); a k-d tree (few columns) searches in double precision, so gets them as computed.
-    q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, steady_1, steady_2,
-                          dtype=np.float32)
-    if q.shape[1] <= KDTREE_MAX_DIM:
-        q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, steady_1, steady_2)
+    # Single precision, as the brute-force search reads them (half the memory of a large mesh's);
+    # with k <= KDTREE_MAX_DIM the rows may be few enough for a k-d tree, which reads double.
+    dtype = np.float32 if c_12.shape[1] > KDTREE_MAX_DIM else np.float64
+    q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, steady_1, steady_2, dtype=dtype)
     mesh_2 = shape_2.mesh
     if mesh_2.n_vertices > config.local_search_above and len(sample_2) < mesh_2.n_vertices:
         return nearest_rows_near(r, q, mesh_2.vertices, sample_2, config.local_search_reach)

@@ -155,7 +155,6 @@ def boundary_loop_vertices(mesh: Mesh) -> list:
     return loops
 
 
-
 # ----------------------------------------------------------------------------------------------
 # Scale normalization
 
