@@ -75,9 +75,9 @@ def add_sample_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def score_pair(task: tuple) -> dict:
-    dataset, source, target, group, variants = task
+    dataset, source, target, group, variants, repair = task
     warnings.simplefilter("ignore")
-    shapes, correspondence, truth = prepared_pair(dataset, source, target)
+    shapes, correspondence, truth = prepared_pair(dataset, source, target, repair)
     maps, seconds, checks = {}, {}, {}
     for name, changes in variants.items():
         start = time.perf_counter()
@@ -114,6 +114,7 @@ def main(argv=None) -> int:
     add_sample_arguments(parser)
     parser.add_argument("variants", help="JSON: name -> DenseConfig fields to change")
     parser.add_argument("--out", type=Path)
+    parser.add_argument("--repair", action="store_true", help="prepare the meshes as --repair does")
     args = parser.parse_args(argv)
     try:
         variants = read_variants(args.variants)
@@ -121,7 +122,7 @@ def main(argv=None) -> int:
     except (OSError, DarcyanError) as exc:  # one line, no traceback (OSError names its file)
         print(f"dense_variants.py: error: {exc}", file=sys.stderr)
         return 2
-    tasks = [(args.dataset, source, target, group, variants) for source, target, group in pairs]
+    tasks = [(args.dataset, source, target, group, variants, args.repair) for source, target, group in pairs]
     results = list(process_map(score_pair, tasks, 2, ordered=True))
     if args.out:
         args.out.write_text(json.dumps(results, indent=1))

@@ -116,6 +116,19 @@ class DenseConfig:
             members of an ensemble still draw at random). Farthest points gained a little on
             FAUST but lost one tosca-hires map (michael0 -> 10: 99.0% -> 88.8% within 0.05), so
             random stays the default (``docs/parameters.md``).
+        alignment_rounds: rounds of :func:`~darcyan.dense.alignment.aligned_map` after ZoomOut:
+            the source deformed as rigidly as possible towards the map's images, then each
+            vertex sent to the target vertex nearest its deformed position and normal (0: the
+            map ZoomOut reads out). Intrinsic refinements drift towards the most isometric map,
+            which between two bodies is not the true one; the shape of the source's one-rings
+            is information they do not use (``docs/parameters.md``).
+        alignment_length: the deformation follows the map on scales beyond this length (sqrt(area)
+            units) and keeps the source's shape below it (the weight of its pull is
+            ``1 / alignment_length^2`` per unit area; :class:`~darcyan.geometry.deformation.ArapDeformation`).
+        alignment_normal_weight: the normals' weight (a length, sqrt(area) units) beside the
+            positions in the nearest-point search: a point near the surface of an arm is not
+            sent across to the body beside it.
+        alignment_iterations: local-global steps of the deformation per round.
     """
 
     method: str = "zoomout"
@@ -149,6 +162,10 @@ class DenseConfig:
     commutativity: float = 3.0
     seed: int = 0
     sampling: str = "random"
+    alignment_rounds: int = 2
+    alignment_length: float = 0.035
+    alignment_normal_weight: float = 0.02
+    alignment_iterations: int = 6
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -158,14 +175,14 @@ class DenseConfig:
         if self.landmarks not in LANDMARK_MODES:
             raise ConfigError(f"dense: landmarks must be one of {LANDMARK_MODES}, got {self.landmarks!r}")
         for name in ("basis_start", "basis_size", "basis_step", "local_search_reach", "candidates", "seed_basis",
-                     "seed_samples", "ensemble"):
+                     "seed_samples", "ensemble", "alignment_iterations"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
                 raise ConfigError(f"dense: {name} must be a positive integer, got {value!r}")
         if self.basis_start > self.basis_size:
             raise ConfigError(f"dense: basis_start ({self.basis_start}) exceeds basis_size ({self.basis_size})")
         for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "signature_until",
-                     "basis_margin", "margin_from"):
+                     "basis_margin", "margin_from", "alignment_rounds"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 0:
                 raise ConfigError(f"dense: {name} must be a non-negative integer, got {value!r}")
@@ -180,8 +197,11 @@ class DenseConfig:
             raise ConfigError(f"dense: trust_orientation must be in [-1, 1], got {self.trust_orientation!r}")
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
                      "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns",
-                     "commutativity"):
+                     "commutativity", "alignment_normal_weight"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0
                     and np.isfinite(value)):
                 raise ConfigError(f"dense: {name} must be non-negative, got {value!r}")
+        length = self.alignment_length
+        if not (isinstance(length, (int, float)) and not isinstance(length, bool) and length > 0 and np.isfinite(length)):
+            raise ConfigError(f"dense: alignment_length must be a positive length, got {length!r}")

@@ -11,6 +11,8 @@
    the landmark coordinates, the curvature signature in the coarse steps and its turns beside
    the spectral terms; the final map is read out for every source vertex. Plain ZoomOut drifts
    on the less isometric TOSCA pairs (cat); the bijectivity term holds it.
+4. its alignment (:mod:`darcyan.dense.alignment`): the source deformed as rigidly as possible
+   onto the map's images, each vertex then sent to the nearest target vertex in space.
 
 ``DenseMap.check`` says which seed was used, how far the map keeps its landmarks' orientation
 (:func:`map_check`) and whether it is trusted. :func:`pyfm_own_map` is pyFM's own pipeline
@@ -28,6 +30,7 @@ import numpy as np
 from ..errors import DarcyanError
 from ..geometry.knn import nearest_rows
 from ..geometry.mesh import Mesh
+from .alignment import aligned_map
 from .config import DenseConfig
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
 from .seeds import check_of_seeds, choose_seed
@@ -122,6 +125,11 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
                                      steady_1, steady_2))
         local = consensus_map(mesh_2.vertices, maps)
         timings["zoomout"] = time.perf_counter() - t
+        if config.alignment_rounds > 0:
+            say("alignment")
+            t = time.perf_counter()
+            local = aligned_map(shape_1, shape_2, local, config)
+            timings["alignment"] = time.perf_counter() - t
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([mesh_1.input_index[src], mesh_2.input_index[tgt]], axis=1)
     check = map_check(shape_1, local, fields_1, fields_2, turns_1, turns_2)

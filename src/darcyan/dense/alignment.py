@@ -1,0 +1,38 @@
+"""The final step of a dense map: the source deformed onto the target, then read out in space.
+
+ZoomOut's map is intrinsic: between two bodies, or two meshings of one, the most isometric map
+is not the true one, and intrinsic refinements drift towards it (``docs/parameters.md``). Here
+the source mesh is deformed as rigidly as possible towards the images of its vertices
+(:class:`~darcyan.geometry.deformation.ArapDeformation`: it follows the map on the scale of
+limbs and keeps its own shape below it, bends and turns included), and each source vertex is
+sent to the target vertex nearest its deformed position and normal. Repeated a few times,
+each round's map pulls the next deformation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..geometry.deformation import ArapDeformation
+from ..geometry.geodesics import vertex_normals
+from ..geometry.knn import nearest_rows
+from ..geometry.mesh import Mesh
+from .config import DenseConfig
+
+
+def aligned_map(shape_1, shape_2, map_12: np.ndarray, config: DenseConfig = DenseConfig()) -> np.ndarray:
+    """``(n1,) int64``: ``map_12 (n1,)`` (for each vertex of ``shape_1``'s mesh one of
+    ``shape_2``'s) after ``config.alignment_rounds`` rounds of deformation and nearest points
+    (unchanged with 0 rounds). Memory and time O(n1 + n2)."""
+    if config.alignment_rounds == 0:
+        return map_12
+    length, weight = config.alignment_length, config.alignment_normal_weight
+    deformation = shape_1.derived(("arap", length), lambda: ArapDeformation(
+        shape_1.mesh.vertices, shape_1.laplacian, shape_1.vertex_areas, length))
+    target = np.hstack([shape_2.mesh.vertices, weight * shape_2.normals])
+    positions = None
+    for _ in range(config.alignment_rounds):
+        positions = deformation.fit(shape_2.mesh.vertices[map_12], config.alignment_iterations, start=positions)
+        normals = vertex_normals(Mesh(positions, shape_1.mesh.faces))
+        map_12 = nearest_rows(target, np.hstack([positions, weight * normals]))
+    return map_12

@@ -1,0 +1,88 @@
+"""As-rigid-as-possible deformation of a mesh towards soft targets (Sorkine and Alexa 2007).
+
+The energy of positions ``y (n, 3)`` of a mesh at rest in ``x (n, 3)``, with targets ``t (n, 3)``::
+
+    sum_ij w_ij |(y_i - y_j) - R_i (x_i - x_j)|^2  +  (1 / length^2) sum_i a_i |y_i - t_i|^2
+
+(``w`` the cotangent weights, clamped at 0; ``R_i`` the best rotation of vertex i's one-ring;
+``a`` the vertex areas over the total area). Both terms are areas times squared lengths, so the
+balance does not depend on the mesh's scale or resolution: the mesh follows the targets on
+scales beyond about ``length`` (in sqrt(area) units) and keeps its own shape below it, bends
+included, since each one-ring may turn. It is minimized by local-global iterations: each one-ring's
+rotation from an SVD, then one sparse solve for the positions, whose matrix is factorized once.
+
+libigl's ``arap`` holds chosen vertices fixed (hard constraints); a dense map's images are each
+a vertex or two off, so here every vertex is pulled towards its target softly instead.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class ArapDeformation:
+    """A mesh's as-rigid-as-possible fit to soft targets; build once, :meth:`fit` many times.
+
+    Args:
+        vertices: ``(n, 3)`` the rest positions.
+        laplacian: ``(n, n)`` its cotangent Laplacian (scipy sparse, negative semidefinite, as
+            :attr:`darcyan.geometry.shape.Shape.laplacian`).
+        areas: ``(n,)`` its vertex areas (any scale: they are divided by their sum).
+        length: the scale (sqrt(area) units of the mesh) beyond which the fit follows the targets.
+    """
+
+    def __init__(self, vertices: np.ndarray, laplacian, areas: np.ndarray, length: float):
+        import scipy.sparse as sp  # lazily: a cached match imports no scipy
+        from scipy.sparse.linalg import splu
+
+        n = len(vertices)
+        coo = laplacian.tocoo()
+        off = (coo.row != coo.col) & (coo.data > 0)  # obtuse pairs (negative weights) are left out
+        self._rows, cols, weights = coo.row[off], coo.col[off], coo.data[off]
+        self._weights = sp.csr_matrix((weights, (self._rows, cols)), shape=(n, n))
+        self._vertices = np.asarray(vertices, dtype=np.float64)
+        # each directed edge (i, j), times its weight: x_i - x_j
+        self._edges = weights[:, None] * (self._vertices[self._rows] - self._vertices[cols])
+        self._cols = cols
+        degree = np.asarray(self._weights.sum(axis=1)).ravel()
+        areas = np.asarray(areas, dtype=np.float64)
+        # an isolated vertex (no face of nonzero area) still gets a pull, so the system stays regular
+        areas = np.maximum(areas / areas.sum(), 1e-3 / n)
+        self._pull = areas / length ** 2
+        system = sp.diags(degree + self._pull) - self._weights
+        self._solve = splu(system.tocsc()).solve
+
+    def fit(self, targets: np.ndarray, iterations: int, start: np.ndarray | None = None) -> np.ndarray:
+        """``(n, 3)``: positions after ``iterations`` local-global steps towards ``targets (n, 3)``,
+        starting from ``start (n, 3)`` (default: the targets)."""
+        targets = np.asarray(targets, dtype=np.float64)
+        positions = targets.copy() if start is None else np.asarray(start, dtype=np.float64)
+        pulled = self._pull[:, None] * targets
+        for _ in range(iterations):
+            rotations = self._rotations(positions)
+            positions = self._solve(self._rotated_edges(rotations) + pulled)
+        return positions
+
+    def _rotations(self, positions: np.ndarray) -> np.ndarray:
+        """``(n, 3, 3)`` each one-ring's rotation best taking its rest edges to its current ones."""
+        n = len(positions)
+        current = positions[self._rows] - positions[self._cols]
+        covariance = np.empty((n, 3, 3))
+        for a in range(3):
+            for b in range(3):
+                covariance[:, a, b] = np.bincount(self._rows, self._edges[:, a] * current[:, b], minlength=n)
+        u, _, vt = np.linalg.svd(covariance)
+        # R = V U^T, with the sign of V's last column turned where that would be a reflection
+        flip = np.linalg.det(np.matmul(vt.transpose(0, 2, 1), u.transpose(0, 2, 1))) < 0
+        vt[flip, 2, :] *= -1
+        return np.matmul(vt.transpose(0, 2, 1), u.transpose(0, 2, 1))
+
+    def _rotated_edges(self, rotations: np.ndarray) -> np.ndarray:
+        """``(n, 3)``: ``sum_j w_ij (R_i + R_j) (x_i - x_j) / 2``, the global step's right side."""
+        x, w = self._vertices, self._weights
+        own = np.einsum("nab,nb->na", rotations, np.asarray(w.sum(axis=1)).ravel()[:, None] * x - w @ x)
+        # sum_j w_ij R_j (x_i - x_j), column by column of the rotations
+        others = np.zeros_like(x)
+        for b in range(3):
+            others += x[:, b, None] * (w @ rotations[:, :, b]) - w @ (rotations[:, :, b] * x[:, b, None])
+        return 0.5 * (own + others)

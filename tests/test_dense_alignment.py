@@ -1,0 +1,70 @@
+"""The dense map's last step (:mod:`darcyan.dense.alignment`): the source deformed onto the
+target, read out in space, on two poses of the figure whose true map is known (the same vertex)."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from darcyan.dense.alignment import aligned_map
+from darcyan.dense.config import DenseConfig
+from darcyan.errors import ConfigError
+from darcyan.geometry import synthetic
+from darcyan.geometry.shape import prepare_shape
+
+
+@pytest.fixture(scope="module")
+def poses():
+    shape_1, shape_2 = (prepare_shape(synthetic.figure(pose, subdivisions=4)) for pose in (0, 1))
+    truth = shape_2.mesh_index(shape_1.mesh.input_index)  # the figure's poses share their vertices
+    return shape_1, shape_2, truth
+
+
+def noisy_map(shape_2, truth: np.ndarray, share: float, seed: int = 0) -> np.ndarray:
+    """``truth`` with ``share`` of its images moved to a neighbour of theirs (an edge off)."""
+    faces = shape_2.mesh.faces
+    rng = np.random.default_rng(seed)
+    moved = truth.copy()
+    chosen = np.flatnonzero(rng.random(len(truth)) < share)
+    corner_faces = {}
+    for f, face in enumerate(faces):
+        for v in face:
+            corner_faces.setdefault(int(v), []).append(f)
+    for i in chosen:
+        face = faces[rng.choice(corner_faces[int(truth[i])])]
+        moved[i] = rng.choice([v for v in face if v != truth[i]])
+    return moved
+
+
+def test_the_true_map_is_kept_and_a_noisy_one_is_mended(poses):
+    shape_1, shape_2, truth = poses
+    assert np.array_equal(aligned_map(shape_1, shape_2, truth), truth)
+    noisy = noisy_map(shape_2, truth, 0.5)
+    mended = aligned_map(shape_1, shape_2, noisy)
+    # Half the images an edge off; the deformation keeps the source's one-rings, so it puts
+    # nearly every vertex back on its own image (measured: 0.5 -> 0.99 exact).
+    assert (noisy == truth).mean() < 0.55
+    assert (mended == truth).mean() > 0.9
+    unaligned = dataclasses.replace(DenseConfig(), alignment_rounds=0)
+    assert np.array_equal(aligned_map(shape_1, shape_2, noisy, unaligned), noisy)
+
+
+def test_the_map_does_not_depend_on_where_the_target_lies(poses):
+    shape_1, shape_2, truth = poses
+    noisy = noisy_map(shape_2, truth, 0.5, seed=1)
+    rotation, _ = np.linalg.qr(np.random.default_rng(5).normal(size=(3, 3)))
+    rotation *= np.sign(np.linalg.det(rotation))
+    mesh = shape_2.mesh
+    moved = prepare_shape(type(mesh)(mesh.vertices @ rotation.T + 3.0, mesh.faces))
+    # the same map but for rounding (a near tie of two target vertices may go either way)
+    assert (aligned_map(shape_1, moved, noisy) == aligned_map(shape_1, shape_2, noisy)).mean() > 0.995
+
+
+@pytest.mark.parametrize("changes, field", [({"alignment_rounds": -1}, "alignment_rounds"),
+                                            ({"alignment_length": 0.0}, "alignment_length"),
+                                            ({"alignment_length": float("nan")}, "alignment_length"),
+                                            ({"alignment_normal_weight": -0.1}, "alignment_normal_weight"),
+                                            ({"alignment_iterations": 0}, "alignment_iterations")])
+def test_bad_alignment_settings_name_the_field(changes, field):
+    with pytest.raises(ConfigError, match=field):
+        DenseConfig(**changes)
