@@ -64,7 +64,33 @@ def test_the_map_does_not_depend_on_where_the_target_lies(poses):
                                             ({"alignment_length": 0.0}, "alignment_length"),
                                             ({"alignment_length": float("nan")}, "alignment_length"),
                                             ({"alignment_normal_weight": -0.1}, "alignment_normal_weight"),
-                                            ({"alignment_iterations": 0}, "alignment_iterations")])
+                                            ({"alignment_iterations": 0}, "alignment_iterations"),
+                                            ({"alignment_slack": -0.01}, "alignment_slack")])
 def test_bad_alignment_settings_name_the_field(changes, field):
     with pytest.raises(ConfigError, match=field):
         DenseConfig(**changes)
+
+
+def test_an_image_far_from_its_landmark_distances_is_not_taken(poses):
+    shape_1, shape_2, truth = poses
+    noisy = noisy_map(shape_2, truth, 0.5, seed=2)
+    free = aligned_map(shape_1, shape_2, noisy)
+    assert (free != noisy).mean() > 0.2
+    # Distances that only the old images fit (0 on them, 1 elsewhere): a move to any other
+    # vertex is refused and keeps the old image.
+    fields_1 = np.zeros((shape_1.n_vertices, 1))
+    fields_2 = np.ones((shape_2.n_vertices, 1))
+    fields_2[noisy] = 0.0
+    guarded = aligned_map(shape_1, shape_2, noisy, DenseConfig(), fields_1, fields_2)
+    fitting = np.isin(free, noisy)
+    assert (~fitting).sum() > 10
+    assert np.array_equal(guarded, np.where(fitting, free, noisy))
+    # Distances that every image fits alike: the guard changes nothing.
+    same = aligned_map(shape_1, shape_2, noisy, DenseConfig(), fields_1, np.zeros((shape_2.n_vertices, 1)))
+    assert np.array_equal(same, free)
+    # The true distances to the figure's tips: the mended map is as exact as without them.
+    tips = synthetic.figure_tips(subdivisions=4)[:4]
+    fields_1 = np.stack([shape_1.solver.distance(int(shape_1.mesh_index([t])[0])) for t in tips], axis=1)
+    fields_2 = np.stack([shape_2.solver.distance(int(shape_2.mesh_index([t])[0])) for t in tips], axis=1)
+    guarded = aligned_map(shape_1, shape_2, noisy, DenseConfig(), fields_1, fields_2)
+    assert (guarded == truth).mean() >= (free == truth).mean() - 0.01

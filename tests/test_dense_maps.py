@@ -30,7 +30,7 @@ def test_dense_map_on_the_figure_is_mostly_within_the_threshold(figure_pair):
     n = synthetic.figure(0).n_vertices
     assert result.target.shape == (n,) and result.target.dtype == np.int64
     assert result.target.min() >= 0 and result.target.max() < n
-    assert len(result.landmarks) >= 3 and set(result.timings) == {"landmarks", "basis", "zoomout"}
+    assert len(result.landmarks) >= 3 and set(result.timings) == {"landmarks", "basis", "zoomout", "alignment"}
     score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED, target_solver=shape_2.solver)
     assert len(score.errors) == DENSE_SCORED
     assert score.rate >= DENSE_MIN_RATE and score.mean <= DENSE_MAX_MEAN

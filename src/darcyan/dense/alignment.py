@@ -6,7 +6,9 @@ the source mesh is deformed as rigidly as possible towards the images of its ver
 (:class:`~darcyan.geometry.deformation.ArapDeformation`: it follows the map on the scale of
 limbs and keeps its own shape below it, bends and turns included), and each source vertex is
 sent to the target vertex nearest its deformed position and normal. Repeated a few times,
-each round's map pulls the next deformation.
+each round's map pulls the next deformation. Where two parts lie side by side (fingers), the
+nearest point in space may lie on the wrong one: an image whose geodesic distances to the
+landmarks disagree with the source vertex's clearly more than ZoomOut's image's did is not taken.
 """
 
 from __future__ import annotations
@@ -20,12 +22,18 @@ from ..geometry.mesh import Mesh
 from .config import DenseConfig
 
 
-def aligned_map(shape_1, shape_2, map_12: np.ndarray, config: DenseConfig = DenseConfig()) -> np.ndarray:
+def aligned_map(shape_1, shape_2, map_12: np.ndarray, config: DenseConfig = DenseConfig(),
+                fields_1: np.ndarray | None = None, fields_2: np.ndarray | None = None) -> np.ndarray:
     """``(n1,) int64``: ``map_12 (n1,)`` (for each vertex of ``shape_1``'s mesh one of
     ``shape_2``'s) after ``config.alignment_rounds`` rounds of deformation and nearest points
-    (unchanged with 0 rounds). Memory and time O(n1 + n2)."""
+    (unchanged with 0 rounds). With the geodesic distances to the landmarks on both shapes
+    (``fields_1 (n1, k)``, ``fields_2 (n2, k)``), a vertex keeps its image in ``map_12`` where
+    the new image's distances differ from its own by more than ``config.alignment_slack``
+    beyond those of the old image (the largest difference over the landmarks). Memory and time
+    O(n1 + n2) (times k)."""
     if config.alignment_rounds == 0:
         return map_12
+    start = map_12
     length, weight = config.alignment_length, config.alignment_normal_weight
     deformation = shape_1.derived(("arap", length), lambda: ArapDeformation(
         shape_1.mesh.vertices, shape_1.laplacian, shape_1.vertex_areas, length))
@@ -35,4 +43,8 @@ def aligned_map(shape_1, shape_2, map_12: np.ndarray, config: DenseConfig = Dens
         positions = deformation.fit(shape_2.mesh.vertices[map_12], config.alignment_iterations, start=positions)
         normals = vertex_normals(Mesh(positions, shape_1.mesh.faces))
         map_12 = nearest_rows(target, np.hstack([positions, weight * normals]))
+    if fields_1 is not None and fields_2 is not None and fields_1.shape[1] > 0:
+        before = np.abs(fields_1 - fields_2[start]).max(axis=1)
+        after = np.abs(fields_1 - fields_2[map_12]).max(axis=1)
+        map_12 = np.where(after > before + config.alignment_slack, start, map_12)
     return map_12

@@ -129,6 +129,10 @@ class DenseConfig:
             positions in the nearest-point search: a point near the surface of an arm is not
             sent across to the body beside it.
         alignment_iterations: local-global steps of the deformation per round.
+        alignment_slack: a vertex keeps ZoomOut's image where the aligned image's geodesic
+            distances to the landmarks differ from the vertex's own by more than this (sqrt(area)
+            units) beyond those of ZoomOut's image: two fingers side by side are near in space,
+            not in their distances to the landmarks (``docs/parameters.md``).
     """
 
     method: str = "zoomout"
@@ -166,6 +170,7 @@ class DenseConfig:
     alignment_length: float = 0.035
     alignment_normal_weight: float = 0.02
     alignment_iterations: int = 6
+    alignment_slack: float = 0.04
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -197,7 +202,7 @@ class DenseConfig:
             raise ConfigError(f"dense: trust_orientation must be in [-1, 1], got {self.trust_orientation!r}")
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
                      "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns",
-                     "commutativity", "alignment_normal_weight"):
+                     "commutativity", "alignment_normal_weight", "alignment_slack"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0
                     and np.isfinite(value)):

@@ -128,7 +128,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         if config.alignment_rounds > 0:
             say("alignment")
             t = time.perf_counter()
-            local = aligned_map(shape_1, shape_2, local, config)
+            local = aligned_map(shape_1, shape_2, local, config, fields_1, fields_2)
             timings["alignment"] = time.perf_counter() - t
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([mesh_1.input_index[src], mesh_2.input_index[tgt]], axis=1)
