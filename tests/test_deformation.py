@@ -64,3 +64,20 @@ def test_a_bent_shape_is_followed_where_a_smooth_displacement_would_not_be():
     fitted = ArapDeformation(rest, shape.laplacian, shape.vertex_areas, 0.035).fit(bent + noise, 8)
     error = np.sqrt(((fitted - bent) ** 2).sum(1).mean())
     assert error < 0.35 * np.sqrt((noise ** 2).sum(1).mean())
+
+
+def test_each_one_ring_gets_the_rotation_of_a_rigid_motion_never_a_reflection(cylinder):
+    shape, arap = cylinder
+    rest = shape.mesh.vertices
+    rotation = random_rotation(5)
+    rotations = arap._rotations(rest @ rotation.T + 1.0)
+    assert np.abs(rotations - rotation).max() < 1e-9
+    mirrored = arap._rotations(rest * [-1.0, 1.0, 1.0])  # no rotation makes a mirror image
+    assert np.allclose(np.linalg.det(mirrored), 1.0)
+    assert np.allclose(np.einsum("nab,ncb->nac", mirrored, mirrored), np.eye(3), atol=1e-9)
+
+
+def test_a_laplacian_of_the_wrong_sign_is_refused(cylinder):
+    shape, _ = cylinder
+    with pytest.raises(ValueError, match="no positive off-diagonal"):
+        ArapDeformation(shape.mesh.vertices, -shape.laplacian, shape.vertex_areas, 0.035)

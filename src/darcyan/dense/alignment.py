@@ -29,8 +29,9 @@ def aligned_map(shape_1, shape_2, map_12: np.ndarray, config: DenseConfig = Dens
     (unchanged with 0 rounds). With the geodesic distances to the landmarks on both shapes
     (``fields_1 (n1, k)``, ``fields_2 (n2, k)``), a vertex keeps its image in ``map_12`` where
     the new image's distances differ from its own by more than ``config.alignment_slack``
-    beyond those of the old image (the largest difference over the landmarks). Memory and time
-    O(n1 + n2) (times k)."""
+    beyond those of the old image (the largest difference over the landmarks). ``map_12`` must
+    map every vertex (no :data:`~darcyan.dense.maps.UNMAPPED`). Memory and time O(n1 + n2) (times
+    k) beside the deformation's sparse factorization, kept with ``shape_1``."""
     if config.alignment_rounds == 0:
         return map_12
     start = map_12

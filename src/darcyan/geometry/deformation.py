@@ -2,9 +2,10 @@
 
 The energy of positions ``y (n, 3)`` of a mesh at rest in ``x (n, 3)``, with targets ``t (n, 3)``::
 
-    sum_ij w_ij |(y_i - y_j) - R_i (x_i - x_j)|^2  +  (1 / length^2) sum_i a_i |y_i - t_i|^2
+    sum_ij w_ij |(y_i - y_j) - R_i (x_i - x_j)|^2  +  (2 / length^2) sum_i a_i |y_i - t_i|^2
 
-(``w`` the cotangent weights, clamped at 0; ``R_i`` the best rotation of vertex i's one-ring;
+(the first sum over ordered pairs of neighbours, so each edge twice; ``w`` the cotangent
+weights, clamped at 0; ``R_i`` the best rotation of vertex i's one-ring;
 ``a`` the vertex areas over the total area). Both terms are areas times squared lengths, so the
 balance does not depend on the mesh's scale or resolution: the mesh follows the targets on
 scales beyond about ``length`` (in sqrt(area) units) and keeps its own shape below it, bends
@@ -37,7 +38,13 @@ class ArapDeformation:
 
         n = len(vertices)
         coo = laplacian.tocoo()
+        coo.data = np.asarray(coo.data, dtype=np.float64)
         off = (coo.row != coo.col) & (coo.data > 0)  # obtuse pairs (negative weights) are left out
+        if not off.any():
+            raise ValueError("ARAP: the Laplacian has no positive off-diagonal weight (a negative "
+                             "semidefinite cotangent Laplacian is expected)")
+        if not (np.isfinite(length) and length > 0):
+            raise ValueError(f"ARAP: length must be a positive number, got {length!r}")
         self._rows, cols, weights = coo.row[off], coo.col[off], coo.data[off]
         self._weights = sp.csr_matrix((weights, (self._rows, cols)), shape=(n, n))
         self._vertices = np.asarray(vertices, dtype=np.float64)
@@ -54,7 +61,9 @@ class ArapDeformation:
 
     def fit(self, targets: np.ndarray, iterations: int, start: np.ndarray | None = None) -> np.ndarray:
         """``(n, 3)``: positions after ``iterations`` local-global steps towards ``targets (n, 3)``,
-        starting from ``start (n, 3)`` (default: the targets)."""
+        starting from ``start (n, 3)`` (default: the targets). Time per step O(n) beside one
+        solve with the factorization built at construction (its fill-in grows a little faster
+        than n: about 0.2 s to build at 52k vertices)."""
         targets = np.asarray(targets, dtype=np.float64)
         positions = targets.copy() if start is None else np.asarray(start, dtype=np.float64)
         pulled = self._pull[:, None] * targets
