@@ -52,6 +52,8 @@ class ArapDeformation:
         self._edges = weights[:, None] * (self._vertices[self._rows] - self._vertices[cols])
         self._cols = cols
         degree = np.asarray(self._weights.sum(axis=1)).ravel()
+        # sum_j w_ij (x_i - x_j): the rest one-ring, rotated in each step
+        self._spokes = degree[:, None] * self._vertices - self._weights @ self._vertices
         areas = np.asarray(areas, dtype=np.float64)
         # an isolated vertex (no face of nonzero area) still gets a pull, so the system stays regular
         areas = np.maximum(areas / areas.sum(), 1e-3 / n)
@@ -89,7 +91,7 @@ class ArapDeformation:
     def _rotated_edges(self, rotations: np.ndarray) -> np.ndarray:
         """``(n, 3)``: ``sum_j w_ij (R_i + R_j) (x_i - x_j) / 2``, the global step's right side."""
         x, w = self._vertices, self._weights
-        own = np.einsum("nab,nb->na", rotations, np.asarray(w.sum(axis=1)).ravel()[:, None] * x - w @ x)
+        own = np.einsum("nab,nb->na", rotations, self._spokes)
         # sum_j w_ij R_j (x_i - x_j), column by column of the rotations
         others = np.zeros_like(x)
         for b in range(3):
