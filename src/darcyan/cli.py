@@ -204,6 +204,13 @@ def cmd_match(args: argparse.Namespace) -> int:
                 if not check["trusted"]:
                     print(f"darcyan: warning: {target}: the dense map is not trusted (another seed scored close, or its "
                           f"orientation disagrees with its landmarks): look at it (--plot)", file=sys.stderr)
+            if args.truth:
+                from .eval.dense_scores import evaluate_dense
+
+                scored = evaluate_dense(shapes[0].mesh, shapes[1].mesh, dense.target, truth,
+                                        target_solver=shapes[1].solver)
+                print(f"darcyan: dense map: {int((scored.errors <= scored.threshold).sum())} of {len(scored.errors)} "
+                      f"vertices within {scored.threshold:g} sqrt(area), mean error {scored.mean:.4f}", file=sys.stderr)
             left_out = int((dense.target == UNMAPPED).sum())
             if left_out:
                 print(f"darcyan: warning: {args.source}: {left_out} vertices outside the matched component "

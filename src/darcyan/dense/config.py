@@ -129,6 +129,13 @@ class DenseConfig:
             positions in the nearest-point search: a point near the surface of an arm is not
             sent across to the body beside it.
         alignment_iterations: local-global steps of the deformation per round.
+        start_dimensions: when the matches give fewer than three consistent landmarks, the map
+            starts from each choice of signs of this many first (non-constant) Laplace-Beltrami
+            eigenfunctions, 2^d short maps (:mod:`darcyan.dense.start`).
+        start_landmarks: farthest points of the source whose images under the chosen short map
+            are the landmarks of such a start.
+        start_checked: the short maps of best signature score whose orientation is read (each
+            costs ``start_landmarks`` fast-marching solves on the target).
         alignment_slack: a vertex keeps ZoomOut's image where the aligned image's geodesic
             distances to the landmarks differ from the vertex's own by more than this (sqrt(area)
             units) beyond those of ZoomOut's image: two fingers side by side are near in space,
@@ -171,6 +178,9 @@ class DenseConfig:
     alignment_normal_weight: float = 0.02
     alignment_iterations: int = 6
     alignment_slack: float = 0.04
+    start_dimensions: int = 4
+    start_landmarks: int = 6
+    start_checked: int = 4
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -180,7 +190,8 @@ class DenseConfig:
         if self.landmarks not in LANDMARK_MODES:
             raise ConfigError(f"dense: landmarks must be one of {LANDMARK_MODES}, got {self.landmarks!r}")
         for name in ("basis_start", "basis_size", "basis_step", "local_search_reach", "candidates", "seed_basis",
-                     "seed_samples", "ensemble", "alignment_iterations"):
+                     "seed_samples", "ensemble", "alignment_iterations", "start_dimensions", "start_landmarks",
+                     "start_checked"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
                 raise ConfigError(f"dense: {name} must be a positive integer, got {value!r}")

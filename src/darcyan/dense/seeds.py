@@ -48,7 +48,8 @@ def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = Den
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
     scoring = config if full_basis else seed_scoring_config(config)
-    seed, seeds, _, _ = choose_seed(shape_1, shape_2, correspondence, scoring, lambda stage: None, {})
+    seed, seeds, _, _ = choose_seed(shape_1, shape_2, correspondence, scoring, lambda stage: None, {},
+                                    spectral_start=False)
     return matching_of_seed(correspondence, seed.rank), check_of_seeds(seed, seeds, config.seed_margin)
 
 
@@ -94,12 +95,18 @@ def seed_check(rank: int, signatures: dict, margin: float) -> dict:
 
 
 def check_of_seeds(seed, seeds: list, margin: float) -> dict:
-    return seed_check(seed.rank, {s.rank: s.signature for s in seeds}, margin)
+    check = seed_check(seed.rank, {s.rank: s.signature for s in seeds}, margin)
+    check["start"] = seed.start
+    return check
 
 
-def choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, timings: dict) -> tuple:
+def choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, timings: dict,
+                spectral_start: bool = True) -> tuple:
     """``(seed, seeds, samples, bases)``: the ZoomOut samples and bases of both shapes, the
-    usable seeds and the one chosen (see :func:`_chosen_seed`)."""
+    usable seeds and the one chosen (see :func:`_chosen_seed`). When no matching gives
+    :data:`~darcyan.dense.landmarks.MIN_LANDMARKS` consistent landmarks and ``spectral_start``,
+    the one seed is the landmarks a short spectral map finds
+    (:func:`~darcyan.dense.start.spectral_matching`; its ``start`` is ``"spectral"``)."""
     for shape in (shape_1, shape_2):
         if not hasattr(shape, "mesh_index"):
             raise DarcyanError(f"{shape.name}: a dense map works on prepared shapes, not on a description "
@@ -113,7 +120,13 @@ def choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, timi
     timings["basis"] = time.perf_counter() - t
     t = time.perf_counter()
     say("landmarks")
-    seeds = _seeds(shape_1, shape_2, correspondence, config, samples, bases)
+    fields = ({}, {})
+    seeds = _seeds(shape_1, shape_2, correspondence, config, samples, bases, fields)
+    if not seeds and spectral_start:
+        say("spectral start (too few consistent landmarks)")
+        if bases[0] is None:
+            bases = dense_basis(shape_1, config), dense_basis(shape_2, config)
+        seeds = _spectral_seeds(shape_1, shape_2, correspondence, config, samples, bases, fields)
     if not seeds:
         raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: fewer than {MIN_LANDMARKS} consistent landmark "
                            f"matches, a dense map needs at least {MIN_LANDMARKS}")
@@ -138,6 +151,7 @@ class Seed:
     coords_1: np.ndarray
     coords_2: np.ndarray
     signature: float
+    start: str = "matches"
 
 
 def _chosen_seed(seeds: list, margin: float) -> Seed:
@@ -153,7 +167,30 @@ def chosen_seed(scores: list, margin: float) -> int:
     return best if scores[best] < (1.0 - margin) * scores[0] else 0
 
 
-def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple, bases: tuple) -> list:
+def _spectral_seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple, bases: tuple,
+                    fields: tuple) -> list:
+    """``[seed]`` from the landmarks of :func:`~darcyan.dense.start.spectral_matching` (``[]``
+    when the bases are too small for it), its rank one past the matchings'. Two consistent
+    landmarks the matches give join its short maps (one alone may be a wrong match)."""
+    from .landmarks import _landmark_pairs
+    from .start import spectral_matching
+
+    _, _, known_1, known_2 = _landmark_pairs(shape_1, shape_2, correspondence, config, fields)
+    known = (known_1, known_2) if known_1.shape[1] == MIN_LANDMARKS - 1 else None
+    matching = spectral_matching(shape_1, shape_2, config, samples, bases, fields, known)
+    if matching is None:
+        return []
+    landmarks = landmark_set(shape_1, shape_2, matching, config, fields)
+    if landmarks is None:  # the map's own landmarks disagree: keep them all
+        landmarks = landmark_set(shape_1, shape_2, matching, dataclasses.replace(config, landmarks="all"), fields)
+    if landmarks is None:
+        return []
+    rank = 1 + len(getattr(correspondence, "alternatives", ()))
+    return [Seed(rank, *landmarks, matching.signature, start="spectral")]
+
+
+def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple, bases: tuple,
+           fields: tuple | None = None) -> list:
     """The usable seeds among the correspondence and its first ``config.candidates - 1``
     alternatives (``correspondence.alternatives``, the other matchings the sparse stage
     weighed). With several, each seeds a short ZoomOut (``config.seed_basis`` eigenfunctions,
@@ -163,7 +200,7 @@ def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple
     sees and the curvature of a face or a chest does. A matching whose consistent landmarks are
     those of an earlier one is left out."""
     matchings = [correspondence] + list(getattr(correspondence, "alternatives", ()))[:max(config.candidates - 1, 0)]
-    fields = ({}, {})
+    fields = ({}, {}) if fields is None else fields
     seeds = []
     seen = set()
     scoring = None

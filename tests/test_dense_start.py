@@ -1,0 +1,66 @@
+"""The landmark-free start (:mod:`darcyan.dense.start`): every pair gets a map, even when the
+sparse matches give fewer than three consistent landmarks."""
+
+import numpy as np
+import pytest
+from conftest import (DENSE_MAX_MEAN, DENSE_MIN_RATE, DENSE_SCORED, FAST_DENSE, moved_and_mirrored_tip_fields,
+                      tip_correspondence)
+
+from darcyan.cli import main
+from darcyan.dense.landmarks import orientation_coordinates
+from darcyan.dense.maps import dense_map
+from darcyan.dense.start import map_orientation, spectral_matching
+from darcyan.dense.zoomout import dense_basis, zoomout_samples
+from darcyan.eval.dense_scores import evaluate_dense
+from darcyan.geometry import synthetic
+
+
+def test_map_orientation_is_one_for_a_motion_and_minus_one_for_a_reflection():
+    # The same vertices, moved rigidly or mirrored (faces flipped to keep the normals outward):
+    # the identity map keeps the turns between the directions to the tips, or reverses them all.
+    copies = moved_and_mirrored_tip_fields(synthetic.figure(0), seed=3)
+    (_, shape, fields), *others = copies
+    turns = orientation_coordinates(shape, fields)
+    for name, other, other_fields in others:
+        value = map_orientation(turns, orientation_coordinates(other, other_fields))
+        assert value == pytest.approx(1.0 if name == "moved" else -1.0, abs=0.02), name
+    # A map unrelated to its landmarks is near 0.
+    rng = np.random.default_rng(0)
+    assert abs(map_orientation(turns, turns[rng.permutation(len(turns))])) < 0.1
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("given", [0, 2])
+def test_too_few_landmarks_still_give_a_right_map(figure_pair, given):
+    """With no or 2 matched tips (fewer than three consistent landmarks) the map starts from the
+    spectra and still lands where the shared numbering says (identity truth)."""
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()[:given]
+    result = dense_map(shape_1, shape_2, tip_correspondence(tips, tips), FAST_DENSE)
+    assert result.check["start"] == "spectral" and len(result.landmarks) >= 3
+    score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED, target_solver=shape_2.solver)
+    assert score.rate >= DENSE_MIN_RATE and score.mean <= DENSE_MAX_MEAN
+    assert result.check["orientation"] > 0.5
+
+
+def test_the_spectral_start_rejects_the_mirrored_short_maps(figure_pair):
+    """Of the 2^d sign choices, the chosen one keeps the orientation, and its landmarks are the
+    source points' true images (shared numbering) to within a short map's accuracy."""
+    shape_1, shape_2 = figure_pair[0].shape, figure_pair[1].shape
+    samples = zoomout_samples(shape_1, shape_2, FAST_DENSE)
+    bases = dense_basis(shape_1, FAST_DENSE), dense_basis(shape_2, FAST_DENSE)
+    matching = spectral_matching(shape_1, shape_2, FAST_DENSE, samples, bases)
+    assert matching.orientation > 0.5 and len(matching.source_vertex) == FAST_DENSE.start_landmarks
+    truth = shape_2.solver
+    errors = [truth.distance(int(s))[int(t)] / np.sqrt(shape_2.mesh.area())
+              for s, t in zip(matching.source_vertex, matching.target_vertex)]
+    assert np.median(errors) < 0.05
+
+
+def test_cli_dense_truth_prints_the_dense_score(small_pose_files, capsys, tmp_path):
+    code = main(["match", *map(str, small_pose_files), "--dense", "--truth", "identity", "-o", str(tmp_path / "m.csv")])
+    assert code == 0
+    err = capsys.readouterr().err
+    line = next(x for x in err.splitlines() if "vertices within" in x)
+    within, total = (int(x) for x in line.split("dense map: ")[1].split(" vertices")[0].split(" of "))
+    assert total > 0 and within / total >= DENSE_MIN_RATE and "mean error" in line
