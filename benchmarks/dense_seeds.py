@@ -18,6 +18,8 @@ worker processes.
 prints the table for each: which size picks the better seeds.
 
     python benchmarks/dense_seeds.py tosca-5k ../shared/data/tosca-5k/test_pairs.txt 203 --seed-basis 30 60
+
+``--statistics median mean`` likewise scores them with each ``DenseConfig.seed_statistic``.
 """
 
 from __future__ import annotations
@@ -51,38 +53,48 @@ def score_pair(task: tuple) -> dict:
 
 
 def _score_pair(task: tuple) -> dict:
-    dataset, source, target, group, sizes, repair = task
+    dataset, source, target, group, sizes, statistics, repair = task
     warnings.simplefilter("ignore")
     shapes, correspondence, truth = prepared_pair(dataset, source, target, repair)
     default = dense_map(*shapes, correspondence)
     signatures = {int(rank): score for rank, score in default.check["signatures"].items()}
     matchings = [correspondence] + list(correspondence.alternatives)
+    # A spectral start (no matching with three consistent landmarks) is one seed past the matchings.
+    signatures = {rank: score for rank, score in signatures.items() if rank < len(matchings)}
     maps = {rank: dense_map(*shapes, matchings[rank], DenseConfig(candidates=1)).target for rank in signatures}
     maps["default"] = default.target
     scores = evaluate_dense_maps(shapes[0].mesh, shapes[1].mesh, maps, truth, SAMPLES, target_solver=shapes[1].solver)
     by_size = {size: seed_scores(*shapes, correspondence, DenseConfig(seed_basis=size)) for size in sizes}
+    by_statistic = {name: seed_scores(*shapes, correspondence, DenseConfig(seed_statistic=name)) for name in statistics}
     return {"pair": f"{source}->{target}", "group": group, "default_seed": default.check["seed"],
             "trusted": default.check["trusted"], "default_rate": scores["default"].rate,
+            "orientation": default.check["orientation"], "distortion": default.check["distortion"],
+            "start": default.check.get("start", "matches"), "margin": float(correspondence.margin),
             "seeds": [{"rank": rank, "signature": signatures[rank], "rate": scores[rank].rate,
-                       "by_seed_basis": {str(size): by_size[size].get(rank) for size in sizes}}
+                       "by_seed_basis": {str(size): by_size[size].get(rank) for size in sizes},
+                       "by_statistic": {name: by_statistic[name].get(rank) for name in statistics}}
                       for rank in signatures]}
 
 
-def pick(seeds: list, margin: float, size: int | None = None) -> dict:
+def pick(seeds: list, margin: float, size: int | None = None, statistic: str | None = None) -> dict:
     """The rule of :func:`darcyan.dense.maps.dense_map` with ``seed_margin = margin`` (and the
-    scores of short ZoomOuts of ``size`` eigenfunctions, when given)."""
-    return seeds[chosen_seed([s["signature"] if size is None else s["by_seed_basis"][str(size)] for s in seeds],
-                             margin)]
+    scores of short ZoomOuts of ``size`` eigenfunctions, or summed by ``statistic``, when given)."""
+    return seeds[chosen_seed([s["signature"] if size is None and statistic is None else
+                              s["by_statistic"][statistic] if statistic else s["by_seed_basis"][str(size)]
+                              for s in seeds], margin)]
 
 
-def summary(results: list, size: int | None = None) -> list:
+def summary(results: list, size: int | None = None, statistic: str | None = None) -> list:
     lines = ["| margin | picks the sparse seed | fixes | breaks | picks clearly below the best seed |",
              "| ---: | ---: | ---: | ---: | --- |"]
     if size is not None:  # the pairs scored at that size (a journal may hold older lines)
         results = [r for r in results if all(str(size) in s.get("by_seed_basis", {}) for s in r["seeds"])]
         lines.insert(0, f"seed_basis {size} ({len(results)} pairs):")
+    if statistic is not None:
+        results = [r for r in results if all(statistic in s.get("by_statistic", {}) for s in r["seeds"])]
+        lines.insert(0, f"seed_statistic {statistic} ({len(results)} pairs):")
     for margin in MARGINS:
-        chosen = [(r, pick(r["seeds"], margin, size)) for r in results if r["seeds"]]
+        chosen = [(r, pick(r["seeds"], margin, size, statistic)) for r in results if r["seeds"]]
         kept = sum(1 for r, s in chosen if s is r["seeds"][0])
         fixed = sum(1 for r, s in chosen if s["rate"] >= r["seeds"][0]["rate"] + CLEAR)
         broken = sum(1 for r, s in chosen if s["rate"] <= r["seeds"][0]["rate"] - CLEAR)
@@ -98,6 +110,8 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, default=Path("dense-seeds.jsonl"))
     parser.add_argument("--seed-basis", type=int, nargs="+", default=[], metavar="N",
                         help="also score the seeds with short ZoomOuts of these sizes")
+    parser.add_argument("--statistics", nargs="+", default=[], choices=("median", "mean"),
+                        help="also score the seeds with these DenseConfig.seed_statistic")
     parser.add_argument("--repair", action="store_true", help="prepare the meshes as --repair does (e.g. the "
                         "decimated copies of benchmarks/robustness.py, with DARCYAN_DATA at their folder)")
     args = parser.parse_args(argv)
@@ -113,7 +127,8 @@ def main(argv=None) -> int:
         print(f"dense_seeds.py: error: {exc}", file=sys.stderr)
         return 2
     finished = {r["pair"] for r in done}
-    tasks = [(args.dataset, source, target, group, tuple(args.seed_basis), args.repair) for source, target, group in pairs
+    tasks = [(args.dataset, source, target, group, tuple(args.seed_basis), tuple(args.statistics), args.repair)
+             for source, target, group in pairs
              if f"{source}->{target}" not in finished]
     with args.out.open("a") as journal:
         for result in (process_map(score_pair, tasks, 2) if tasks else []):
@@ -127,6 +142,9 @@ def main(argv=None) -> int:
     for size in args.seed_basis:
         print()
         print("\n".join(summary(done, size)))
+    for statistic in args.statistics:
+        print()
+        print("\n".join(summary(done, statistic=statistic)))
     return 0
 
 

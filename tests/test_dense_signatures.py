@@ -42,3 +42,19 @@ def test_signature_coordinates_have_the_configured_spread(figure_poses):
         DenseConfig(signature_weight=-1)
     with pytest.raises(ConfigError, match="signature_until"):
         DenseConfig(signature_until=-1)
+
+
+def test_signature_score_by_median_ignores_a_region_that_changed():
+    """A fifth of the points far off (a glued region whose curvature changed): the median of the
+    points' differences stays that of the others, the mean follows the region."""
+    from darcyan.dense.signatures import signature_score
+
+    rng = np.random.default_rng(0)
+    signature = rng.normal(size=(1000, 3))
+    images = signature + 0.01 * rng.choice([-1.0, 1.0], size=signature.shape)  # every point 0.01 off
+    images[:200] += 5.0
+    assert signature_score(signature, images, DenseConfig(seed_statistic="median")) == pytest.approx(0.01)
+    assert signature_score(signature, images, DenseConfig(seed_statistic="mean")) == pytest.approx(0.01 + 0.2 * 5.0,
+                                                                                                 abs=0.02)
+    with pytest.raises(ConfigError, match="seed_statistic"):
+        DenseConfig(seed_statistic="mode")

@@ -294,6 +294,9 @@ def _dense_text(source: str, target: str, map_12, form: str) -> str:
 
 def _seed_verdict(about: dict) -> str:
     """What the seed check (``DenseMap.check`` or ``verified_matches``' second result) decided."""
+    if about.get("start") == "spectral":
+        return (f"started without the feature matches (fewer than 3 consistent ones): landmarks from a short map "
+                f"started from {about.get('start_from', 'the spectra')}")
     if about["seeds"] == 1:
         return ("the feature matches, nothing to weigh them against" if about["seed"] == 0 else
                 f"alternative matching {about['seed']}: the feature matches have too few consistent matches")

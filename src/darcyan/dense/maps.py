@@ -3,7 +3,9 @@
 :func:`dense_map` puts the parts together, each in a module of its own:
 
 1. the seed (:mod:`darcyan.dense.seeds`): the sparse matching or one of its alternatives, the
-   one whose short ZoomOut best keeps the curvature signature (:mod:`darcyan.dense.signatures`);
+   one whose short ZoomOut best keeps the curvature signature (:mod:`darcyan.dense.signatures`),
+   or, when none gives three consistent landmarks, the landmarks of a short map started from
+   the spectra or the axes of inertia (:mod:`darcyan.dense.start`);
 2. its landmarks (:mod:`darcyan.dense.landmarks`): the consistent matches, and each vertex's
    distances to them and their turns, whose nearest neighbours on the other shape give the
    first maps in both directions;
@@ -56,7 +58,10 @@ class DenseMap:
             which seed was used (``seed``: 0 the sparse matching, i its i-th alternative, of
             ``seeds`` usable, distinct ones), its ``signature`` score, the ``runner_up``'s and every
             seed's (``signatures``: rank -> score), whether no other seed came within the
-            margin (``clear``) and whether the map is ``trusted`` (see :class:`~darcyan.dense.config.DenseConfig`).
+            margin (``clear``), how the map was started (``start``: ``"matches"``, or ``"spectral"``
+            when no matching had three consistent landmarks, with ``start_from`` the short map
+            whose landmarks it used, :mod:`darcyan.dense.start`) and whether the map is ``trusted``
+            (see :class:`~darcyan.dense.config.DenseConfig`).
     """
 
     target: np.ndarray
@@ -83,9 +88,11 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         numbering of shape 2 (:data:`UNMAPPED` for vertices outside the analysed mesh).
 
     Raises:
-        DarcyanError: when a shape is a description only, or no seed (the correspondence or
-            one of its alternatives) has :data:`~darcyan.dense.landmarks.MIN_LANDMARKS` consistent landmark pairs. A
-            correspondence with fewer leaves the map to the best usable alternative.
+        DarcyanError: when a shape is a description only, or too small for any start. A
+            correspondence with fewer than :data:`~darcyan.dense.landmarks.MIN_LANDMARKS`
+            consistent landmark pairs leaves the map to the best usable alternative, and when
+            none has them, to landmarks found by a short map started without them
+            (:func:`~darcyan.dense.start.spectral_matching`).
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
     say = progress or (lambda stage: None)

@@ -22,7 +22,7 @@ from ..errors import DarcyanError
 from ..geometry.knn import nearest_rows
 from .config import DenseConfig
 from .landmarks import MIN_LANDMARKS, landmark_set
-from .signatures import point_signature
+from .signatures import point_signature, signature_score
 from .zoomout import dense_basis, map_embeddings, seed_subset, zoomout, zoomout_samples
 
 
@@ -97,6 +97,8 @@ def seed_check(rank: int, signatures: dict, margin: float) -> dict:
 def check_of_seeds(seed, seeds: list, margin: float) -> dict:
     check = seed_check(seed.rank, {s.rank: s.signature for s in seeds}, margin)
     check["start"] = seed.start
+    if seed.start_from:
+        check["start_from"] = seed.start_from
     return check
 
 
@@ -152,6 +154,7 @@ class Seed:
     coords_2: np.ndarray
     signature: float
     start: str = "matches"
+    start_from: str = ""
 
 
 def _chosen_seed(seeds: list, margin: float) -> Seed:
@@ -170,14 +173,12 @@ def chosen_seed(scores: list, margin: float) -> int:
 def _spectral_seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple, bases: tuple,
                     fields: tuple) -> list:
     """``[seed]`` from the landmarks of :func:`~darcyan.dense.start.spectral_matching` (``[]``
-    when the bases are too small for it), its rank one past the matchings'. Two consistent
-    landmarks the matches give join its short maps (one alone may be a wrong match)."""
-    from .landmarks import _landmark_pairs
+    when the bases are too small for it), its rank one past the matchings'. The one or two
+    matches the matching keeps do not join its short maps: too few to be checked against each
+    other, a wrong one among them led the maps astray on glued copies of FAUST."""
     from .start import spectral_matching
 
-    _, _, known_1, known_2 = _landmark_pairs(shape_1, shape_2, correspondence, config, fields)
-    known = (known_1, known_2) if known_1.shape[1] == MIN_LANDMARKS - 1 else None
-    matching = spectral_matching(shape_1, shape_2, config, samples, bases, fields, known)
+    matching = spectral_matching(shape_1, shape_2, config, samples, bases, fields)
     if matching is None:
         return []
     landmarks = landmark_set(shape_1, shape_2, matching, config, fields)
@@ -186,7 +187,7 @@ def _spectral_seeds(shape_1, shape_2, correspondence, config: DenseConfig, sampl
     if landmarks is None:
         return []
     rank = 1 + len(getattr(correspondence, "alternatives", ()))
-    return [Seed(rank, *landmarks, matching.signature, start="spectral")]
+    return [Seed(rank, *landmarks, matching.signature, start="spectral", start_from=matching.start)]
 
 
 def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple, bases: tuple,
@@ -244,4 +245,4 @@ class _SeedScoring:
         f_1, f_2 = coords_1[p_1], coords_2[p_2]
         c_12, c_21 = zoomout(b_1, b_2, nearest_rows(f_2, f_1), nearest_rows(f_1, f_2), self.config, f_1, f_2)
         q, r = map_embeddings(b_1, b_2, c_12, c_21, self.config, f_1, f_2)
-        return float(np.abs(self.signatures[0] - self.signatures[1][nearest_rows(r, q)]).mean())
+        return signature_score(self.signatures[0], self.signatures[1][nearest_rows(r, q)], self.config)

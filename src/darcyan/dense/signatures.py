@@ -62,3 +62,11 @@ def signature_turn_coordinates(shape_1, shape_2, config: DenseConfig, fields_1: 
         return None, None
     return tuple(config.signature_turns * orientation_coordinates(shape, fields, point_signature(shape, config))
                  for shape, fields in ((shape_1, fields_1), (shape_2, fields_2)))
+
+
+def signature_score(signature_1: np.ndarray, signature_at_images: np.ndarray, config: DenseConfig) -> float:
+    """How far a map keeps the :func:`point_signature`: the ``config.seed_statistic`` (median or
+    mean) over source points of the mean absolute difference between a point's signature
+    ``(s, l)`` and its image's ``(s, l)`` (lower is better)."""
+    difference = np.abs(signature_1 - signature_at_images).mean(axis=1)
+    return float(np.median(difference) if config.seed_statistic == "median" else difference.mean())

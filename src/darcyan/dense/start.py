@@ -26,21 +26,22 @@ from ..geometry.knn import nearest_rows
 from ..geometry.sampling import farthest_point_vertices
 from .config import DenseConfig
 from .landmarks import orientation_coordinates
-from .signatures import point_signature, signature_coordinates
+from .signatures import point_signature, signature_coordinates, signature_score
 from .zoomout import map_embeddings, seed_subset, zoomout
 
 
 @dataclass(frozen=True)
 class SpectralMatching:
     """Matches found by a short spectral map (the shape of a sparse correspondence): ``source_vertex
-    (k,)`` and ``target_vertex (k,)`` in input numbering, ``distance (k,)`` zeros; ``signs (d,)``
-    the signs of the eigenfunctions the map started from, ``orientation`` its
+    (k,)`` and ``target_vertex (k,)`` in input numbering, ``distance (k,)`` zeros; ``start``
+    the first map the short map started from (``"spectral +-++"``: the eigenfunctions' signs;
+    ``"axes +-"``: the axes of inertia's), ``orientation`` its
     :func:`map_orientation` and ``signature`` its signature score (lower is better)."""
 
     source_vertex: np.ndarray
     target_vertex: np.ndarray
     distance: np.ndarray
-    signs: tuple
+    start: str
     orientation: float
     signature: float
     alternatives: tuple = ()
@@ -77,18 +78,13 @@ def spectral_matching(shape_1, shape_2, config: DenseConfig, samples: tuple, bas
         f_1, f_2 = known[0][p_1], known[1][p_2]
     coarse_1, coarse_2 = signature_coordinates(shape_1, shape_2, config, p_1, p_2)
     signature_1, signature_2 = point_signature(shape_1, config)[p_1], point_signature(shape_2, config)[p_2]
-    # The first eigenfunction is constant: the signs of the next ``dims`` are the candidates.
-    spectral_1, spectral_2 = b_1[:, 1:dims + 1], b_2[:, 1:dims + 1]
     tried = []
-    for signs in itertools.product((1.0, -1.0), repeat=dims):
-        queries, references = spectral_1 * np.array(signs), spectral_2
-        first_12 = nearest_rows(_beside(references, f_2, config), _beside(queries, f_1, config))
-        first_21 = nearest_rows(_beside(queries, f_1, config), _beside(references, f_2, config))
+    for name, first_12, first_21 in _first_maps(shape_1, shape_2, p_1, p_2, b_1, b_2, f_1, f_2, config):
         c_12, c_21 = zoomout(b_1, b_2, first_12, first_21, short, f_1, f_2, coarse_1, coarse_2)
         q, r = map_embeddings(b_1, b_2, c_12, c_21, short, f_1, f_2)
         map_12 = nearest_rows(r, q)
-        score = float(np.abs(signature_1 - signature_2[map_12]).mean())
-        tried.append((score, signs, map_12))
+        score = signature_score(signature_1, signature_2[map_12], config)
+        tried.append((score, name, map_12))
     tried.sort(key=lambda entry: entry[0])
     # Landmarks of the source: farthest points among the samples (extremities first), the same
     # for every candidate; their distance fields once.
@@ -98,16 +94,51 @@ def spectral_matching(shape_1, shape_2, config: DenseConfig, samples: tuple, bas
     distances_1 = _distances(shape_1, fields[0], source)
     turns_1 = orientation_coordinates(shape_1, distances_1)[p_1]
     best = None
-    for score, signs, map_12 in tried[:config.start_checked]:
+    for score, name, map_12 in tried[:config.start_checked]:
         target = p_2[map_12[picks]]
         distances_2 = _distances(shape_2, fields[1], target)
         orientation = map_orientation(turns_1, orientation_coordinates(shape_2, distances_2)[p_2][map_12])
-        candidate = (orientation > 0, -score, orientation, signs, target)
+        candidate = (orientation > 0, -score, orientation, name, target)
         if best is None or candidate[:2] > best[:2]:
             best = candidate
-    _, minus_score, orientation, signs, target = best
+    _, minus_score, orientation, name, target = best
     return SpectralMatching(shape_1.mesh.input_index[source], shape_2.mesh.input_index[target],
-                            np.zeros(len(source)), tuple(int(s) for s in signs), float(orientation), -minus_score)
+                            np.zeros(len(source)), name, float(orientation), -minus_score)
+
+
+def _first_maps(shape_1, shape_2, p_1, p_2, b_1, b_2, f_1, f_2, config: DenseConfig):
+    """``(name, first_12 (s_1,), first_21 (s_2,))`` for each candidate start, on the samples
+    ``p_i``: each choice of signs of the first ``start_dimensions`` non-constant eigenfunctions
+    (``"spectral +-+-"``), and each proper rotation taking one shape's principal axes of inertia
+    onto the other's (``"axes ++"``). The spectra pair up only while the shapes' topology and
+    proportions agree (parts glued where they touch reorder the eigenfunctions); the axes of
+    inertia do not depend on topology, only on the pose being alike."""
+    dims = config.start_dimensions
+    spectral_1, spectral_2 = b_1[:, 1:dims + 1], b_2[:, 1:dims + 1]  # the first is constant
+    for signs in itertools.product((1.0, -1.0), repeat=dims):
+        queries, references = spectral_1 * np.array(signs), spectral_2
+        name = "spectral " + "".join("+" if x > 0 else "-" for x in signs)
+        yield (name, nearest_rows(_beside(references, f_2, config), _beside(queries, f_1, config)),
+               nearest_rows(_beside(queries, f_1, config), _beside(references, f_2, config)))
+    axes_1, axes_2 = _inertia_axes(shape_1), _inertia_axes(shape_2)
+    x_1, x_2 = shape_1.mesh.vertices[p_1] - shape_1.mesh.vertices.T @ (shape_1.vertex_areas / shape_1.vertex_areas.sum()), \
+        shape_2.mesh.vertices[p_2] - shape_2.mesh.vertices.T @ (shape_2.vertex_areas / shape_2.vertex_areas.sum())
+    for signs in itertools.product((1.0, -1.0), repeat=2):
+        flips = np.array([*signs, signs[0] * signs[1]])  # the third sign keeps the rotation proper
+        rotation = axes_2 @ np.diag(flips) @ axes_1.T * np.linalg.det(axes_2 @ axes_1.T)
+        moved = x_1 @ rotation.T
+        name = "axes " + "".join("+" if x > 0 else "-" for x in signs)
+        yield (name, nearest_rows(_beside(x_2, f_2, config), _beside(moved, f_1, config)),
+               nearest_rows(_beside(moved, f_1, config), _beside(x_2, f_2, config)))
+
+
+def _inertia_axes(shape) -> np.ndarray:
+    """``(3, 3)`` the area-weighted principal axes of the shape's vertices (columns, largest
+    spread first)."""
+    weights = shape.vertex_areas / shape.vertex_areas.sum()
+    centred = shape.mesh.vertices - weights @ shape.mesh.vertices
+    _, axes = np.linalg.eigh((centred * weights[:, None]).T @ centred)
+    return axes[:, ::-1]
 
 
 def map_orientation(turns_1: np.ndarray, turns_at_images: np.ndarray) -> float:

@@ -1,0 +1,78 @@
+"""Is a dense map's ``trusted`` flag honest? Trusted against right, from ``darcyan bench --dense`` runs.
+
+Reads the ``pairs.jsonl`` of each bench output folder given and prints, per folder and pooled:
+the pairs, those with no map, those whose map collapsed (fewer than ``--right`` of the sampled
+vertices within 0.05: 80%) and those wholly wrong (at most 1%), the pooled share within 0.05 and
+mean geodesic error (x100, over mapped samples), how each map was started (``matches`` or
+``spectral``), and the table of trusted against right: a flag worth acting on marks no collapsed
+map trusted.
+
+    python benchmarks/trust_table.py out/faust-glued out/tosca-glued [--right 0.8]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+
+def dense_records(folder: Path) -> list:
+    """The darcyan dense records of one bench folder (the journal: finished pairs, even of a run in progress)."""
+    rows = [json.loads(line) for line in (folder / "pairs.jsonl").read_text().splitlines() if line.strip()]
+    return [r for r in rows if r.get("kind") == "dense" and r.get("method") == "darcyan"]
+
+
+def summary(records: list, right: float) -> dict:
+    mapped = [r for r in records if not r.get("failed")]
+    rates = np.array([r["rate"] for r in mapped])
+    within = sum(r["within"] for r in mapped)
+    samples = sum(r["samples"] for r in mapped)
+    errors = [r["mean_error"] * r["mapped"] for r in mapped if r.get("mean_error") is not None]
+    counted = sum(r["mapped"] for r in mapped if r.get("mean_error") is not None)
+    trusted = np.array([bool(r.get("check", {}).get("trusted")) for r in mapped])
+    good = rates >= right
+    starts: dict = {}
+    for r in mapped:
+        start = r.get("check", {}).get("start", "matches")
+        starts[start] = starts.get(start, 0) + 1
+    return {"pairs": len(records), "no map": len(records) - len(mapped), "collapsed": int((~good).sum()),
+            "wholly wrong": int((rates <= 0.01).sum()), "within": within / samples if samples else float("nan"),
+            "mean x100": 100 * sum(errors) / counted if counted else float("nan"),
+            "trusted right": int((trusted & good).sum()), "trusted collapsed": int((trusted & ~good).sum()),
+            "untrusted right": int((~trusted & good).sum()), "untrusted collapsed": int((~trusted & ~good).sum()),
+            "starts": starts, "worst": sorted((r["rate"], f"{r['source']} -> {r['target']}") for r in mapped)[:3]}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("folders", nargs="+", type=Path)
+    parser.add_argument("--right", type=float, default=0.8, help="a map is right at this share within 0.05")
+    args = parser.parse_args(argv)
+    pooled = []
+    columns = ("pairs", "no map", "collapsed", "wholly wrong", "within", "mean x100", "trusted right",
+               "trusted collapsed", "untrusted right", "untrusted collapsed")
+    print("| set | " + " | ".join(columns) + " | starts | worst |")
+    print("| --- " * (len(columns) + 3) + "|")
+    for folder in args.folders:
+        records = dense_records(folder)
+        pooled += records
+        row = summary(records, args.right)
+        print(f"| {folder.name} | " + " | ".join(_cell(row[c]) for c in columns)
+              + f" | {row['starts']} | {', '.join(f'{n} {r:.2f}' for r, n in row['worst'])} |")
+    if len(args.folders) > 1:
+        row = summary(pooled, args.right)
+        print("| pooled | " + " | ".join(_cell(row[c]) for c in columns) + f" | {row['starts']} | |")
+    return 0
+
+
+def _cell(value) -> str:
+    return f"{value:.4f}" if isinstance(value, float) and value < 1 else f"{value:.2f}" if isinstance(value, float) \
+        else str(value)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
