@@ -15,6 +15,10 @@ second run into the same ``--out`` reuses the copies and the finished pairs:
 - ``inside-out``: every other shape (in name order) with every face flipped (the normals point
   in, as some exporters write them), and three faces taken out of every shape, far apart (small
   holes: no surface is closed); vertex numbering kept.
+- ``isotropic``: the surface remeshed with edges of one length (Botsch and Kobbelt's isotropic
+  remeshing, gpytoolbox's ``remesh_botsch``, projected back onto the input), about as many
+  vertices as the input: another meshing of the same surface, as a scanner's software writes it.
+  Each ground-truth sample moves to the nearest vertex of the copy.
 - ``marching-cubes`` and ``glued``: the surface rebuilt as a scan reconstruction would, by
   marching cubes (scikit-image) on the distance to the surface, at the level of an offset, then
   decimated to the input's vertex count (fast-simplification); the outer sheet is kept. At
@@ -55,7 +59,8 @@ from darcyan.geometry.mesh import Mesh
 NOISE_LEVELS = (0.001, 0.005, 0.01)  # fractions of the bounding-box diagonal
 DECIMATION = 0.5  # fraction of the faces kept
 DEFAULT_CONDITIONS = ("clean",) + tuple(f"noise={level}" for level in NOISE_LEVELS) + ("decimated",)
-CONDITIONS = DEFAULT_CONDITIONS + ("subdivided", "holes", "inside-out", "marching-cubes", "glued")
+CONDITIONS = DEFAULT_CONDITIONS + ("subdivided", "holes", "inside-out", "isotropic", "marching-cubes", "glued")
+REMESH_ITERATIONS = 10  # of remesh_botsch (its default)
 # Marching cubes: (grid step, offset of the level set), both in sqrt(area) units of the input.
 LEVEL_SETS = {"marching-cubes": (0.006, 0.004), "glued": (0.01, 0.012)}
 SURFACE_SAMPLES = 300_000  # points on the input whose distance field is cut
@@ -85,6 +90,15 @@ def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0)
 
             v, f = trimesh.remesh.subdivide(mesh.vertices, mesh.faces)  # keeps the old vertices first
             mesh = Mesh(v, f)
+        elif condition == "isotropic":
+            import gpytoolbox
+
+            # equilateral triangles, two per vertex, of the input's area: about as many vertices
+            length = np.sqrt(2 * mesh.area() / (np.sqrt(3) * mesh.n_vertices))
+            v, f = gpytoolbox.remesh_botsch(mesh.vertices.astype(np.float64), mesh.faces.astype(np.int32),
+                                            i=REMESH_ITERATIONS, h=length, project=True)
+            mesh = Mesh(v, without_nonmanifold_edges(f))
+            remap = cKDTree(mesh.vertices).query(load_mesh(path).vertices)[1]
         elif condition in LEVEL_SETS:
             mesh = level_set_copy(mesh, *LEVEL_SETS[condition], seed=seed)
             remap = cKDTree(mesh.vertices).query(load_mesh(path).vertices)[1]
@@ -186,7 +200,7 @@ def main(argv=None) -> int:
             (folder / "done").touch()
         # Decimation can leave duplicate faces: drop them as `--repair` would.
         result = run_bench(folder, out / condition, ("darcyan",), args.pairs, config=DarcyanConfig(),
-                           jobs=args.jobs, resume=True, repair=condition in ("decimated",) + tuple(LEVEL_SETS),
+                           jobs=args.jobs, resume=True, repair=condition in ("decimated", "isotropic") + tuple(LEVEL_SETS),
                            plots=False, progress=False, dense=args.dense)
         rows[condition] = row = summary(result.results)
         print(f"{condition:<12} strict {row['rate_per_feature']:.3f}  with flips "

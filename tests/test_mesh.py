@@ -3,6 +3,8 @@
 
 import numpy as np
 import pytest
+
+from darcyan.config import Repairing
 from conftest import noisy_copy
 
 from darcyan import MeshError, MeshWarning
@@ -216,27 +218,32 @@ def test_garbage_ply_is_a_mesh_error(tmp_path):
         load_mesh(write(tmp_path, "g.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 9\n\xff\xfe"))
 
 
-def test_duplicate_and_degenerate_faces_need_repair():
+STRICT = Repairing(strict=True)
+
+
+def test_duplicate_and_degenerate_faces_are_dropped_by_default_and_refused_as_strict():
     faces = np.vstack([TETRA_F, TETRA_F[:1], [[0, 0, 1]]])
-    with pytest.raises(MeshError, match="1 duplicate faces, 1 degenerate"):
-        prepare_mesh(Mesh(TETRA_V, faces, "dup"))
-    mesh, changes = prepare_mesh(Mesh(TETRA_V, faces, "dup"), repair=True)
-    assert mesh.n_faces == 4 and len(changes) == 2
+    with pytest.raises(MeshError, match="^dup: 1 duplicate faces, 1 degenerate .*refused as strict"):
+        prepare_mesh(Mesh(TETRA_V, faces, "dup"), settings=STRICT)
+    for repair in (False, True):
+        mesh, changes = prepare_mesh(Mesh(TETRA_V, faces, "dup"), repair=repair)
+        assert mesh.n_faces == 4 and changes == ["dropped 1 duplicate faces", "dropped 1 degenerate (zero-area) faces"]
+        np.testing.assert_array_equal(mesh.faces, TETRA_F)
 
 
-def test_unreferenced_vertices_are_dropped_on_repair_keeping_input_numbering():
+def test_unreferenced_vertices_are_dropped_keeping_input_numbering():
     vertices = np.vstack([[[9, 9, 9]], TETRA_V])
     with pytest.raises(MeshError, match="unreferenced"):
-        prepare_mesh(Mesh(vertices, TETRA_F + 1))
-    mesh, _ = prepare_mesh(Mesh(vertices, TETRA_F + 1), repair=True)
+        prepare_mesh(Mesh(vertices, TETRA_F + 1), settings=STRICT)
+    mesh, _ = prepare_mesh(Mesh(vertices, TETRA_F + 1))
     np.testing.assert_array_equal(mesh.input_index, [1, 2, 3, 4])
 
 
-def test_non_manifold_edge_is_refused():
+def test_non_manifold_edge_is_refused_as_strict():
     vertices = np.vstack([TETRA_V, [[1, 1, 1]]])
     faces = np.vstack([TETRA_F, [[1, 2, 4]]])  # edge 1-2 now has three faces
     with pytest.raises(MeshError, match="non-manifold edges"):
-        prepare_mesh(Mesh(vertices, faces))
+        prepare_mesh(Mesh(vertices, faces), settings=STRICT)
 
 
 def test_bow_tie_vertex_is_split_with_a_warning():

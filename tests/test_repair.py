@@ -2,12 +2,13 @@
 
 * Non-manifold vertices (fans of faces meeting only at a vertex) are split by default, one copy
   per fan, with a warning; every copy maps back to the input vertex.
-* Non-manifold edges and duplicate faces are an error naming ``--repair`` without it, and split
-  apart (faces glued in pairs that close a fan) with it.
+* Non-manifold edges and duplicate faces are split apart (faces glued in pairs that close a fan)
+  or dropped by default, with a note, and refused as strict (``--strict``).
 * A triangle soup is refused with a message saying so without ``--repair``, and welded back to the
   original mesh with it.
 * Meshes decimated by fast_simplification to 10% and 5% of their vertices (duplicate faces,
-  sheets pinched along an edge) prepare and describe with ``repair=True``.
+  sheets pinched along an edge) prepare and describe.
+* A surface that cannot be oriented (a Moebius strip) is cut open where its faces disagree.
 """
 
 from __future__ import annotations
@@ -178,16 +179,16 @@ def test_soup_is_one_error_line_on_the_command_line(capsys, tmp_path):
                                  f"--repair welds coincident vertices\n")
 
 
-def test_fin_on_an_edge_needs_repair_and_is_split_off_with_it():
+def test_fin_on_an_edge_is_split_off_and_refused_as_strict():
     sphere = synthetic.icosphere(2)
     a, b, _ = sphere.faces[0]
     apex = sphere.vertices[[a, b]].mean(axis=0) * 1.5
     fin = Mesh(np.vstack([sphere.vertices, apex]), np.vstack([sphere.faces, [[a, b, sphere.n_vertices]]]), "fin")
     with pytest.raises(MeshError, match=r"^fin: 1 non-manifold edges \(more than two faces on one edge\) "
-                                        r"\(use --repair / repair=True to drop or split them\)$"):
-        prepare_mesh(fin)
+                                        r"\(refused as strict; by default they are dropped or split\)$"):
+        prepare_mesh(fin, settings=Repairing(strict=True))
     with pytest.warns(MeshWarning, match="2 connected components; using the largest, leaving out 1 components with 1 faces"):
-        prepared, changes = prepare_mesh(fin, repair=True)
+        prepared, changes = prepare_mesh(fin)
     assert changes == ["split 1 non-manifold edges (more than two faces on one edge) into pairs of faces"]
     np.testing.assert_array_equal(prepared.input_index, np.arange(sphere.n_vertices))
     np.testing.assert_array_equal(prepared.faces, sphere.faces)
@@ -201,16 +202,16 @@ def test_tetrahedra_sharing_an_edge_come_apart_whole():
     mesh = Mesh(np.vstack([small, large]), faces, "two tetrahedra")
     keys, counts = _edge_counts(faces, mesh.n_vertices)
     assert counts.max() == 4  # edge 0-1 carries all four faces of the two
-    with pytest.raises(MeshError, match="--repair"):
-        prepare_mesh(mesh)
+    with pytest.raises(MeshError, match="refused as strict"):
+        prepare_mesh(mesh, settings=Repairing(strict=True))
     with pytest.warns(MeshWarning, match="2 connected components; using the largest, leaving out 1 components with 4 faces"):
-        prepared, changes = prepare_mesh(mesh, repair=True)
+        prepared, changes = prepare_mesh(mesh)
     assert changes == ["split 1 non-manifold edges (more than two faces on one edge) into pairs of faces"]
     assert prepared.n_faces == 4  # no face dropped: the larger tetrahedron, whole
     np.testing.assert_array_equal(np.sort(prepared.input_index), [0, 1, 4, 5])
 
 
-def test_a_moebius_strip_is_one_clear_error_even_with_repair():
+def test_a_moebius_strip_is_cut_open_where_its_faces_disagree():
     n = 40
     u = np.linspace(0, 2 * np.pi, n, endpoint=False)
     centre = np.c_[np.cos(u), np.sin(u), np.zeros(n)]
@@ -221,24 +222,31 @@ def test_a_moebius_strip_is_one_clear_error_even_with_repair():
     last = i == n - 1  # the strip closes with a half twist: the sides swap
     low_j, high_j = np.where(last, n + j, j), np.where(last, j, n + j)
     faces = np.vstack([np.c_[i, low_j, n + i], np.c_[n + i, low_j, high_j]])
+    with pytest.raises(MeshError, match="not consistently oriented .*refused as strict"):
+        prepare_mesh(Mesh(vertices, faces, "moebius"), settings=Repairing(strict=True))
     for repair in (False, True):
-        with pytest.raises(MeshError, match="not consistently oriented" if not repair else "not orientable"):
-            prepare_mesh(Mesh(vertices, faces, "moebius"), repair=repair)
+        prepared, changes = prepare_mesh(Mesh(vertices, faces, "moebius"), repair=repair)
+        assert any("not orientable" in change for change in changes)
+        keys, counts = _edge_counts(prepared.faces, prepared.n_vertices)
+        directed = prepared.faces.ravel() * prepared.n_vertices + prepared.faces[:, [1, 2, 0]].ravel()
+        assert len(np.unique(directed)) == len(directed)  # every edge now agrees
+        assert prepared.n_faces >= len(faces) - 4  # a cut, not a loss of the strip
+        assert set(prepared.input_index.tolist()) <= set(range(2 * n))
 
 
 @pytest.mark.parametrize("reduction", [0.9, 0.95])
-def test_decimated_mesh_prepares_and_describes_with_repair(tosca, reduction):
+def test_decimated_mesh_prepares_and_describes(tosca, reduction):
     import fast_simplification
 
     mesh = tosca_5k(tosca, "michael0")
     points, faces = fast_simplification.simplify(mesh.vertices, mesh.faces, target_reduction=reduction)
     decimated = Mesh(points, faces, f"michael0 at {reduction:.0%} reduction")
-    with pytest.raises(MeshError, match="non-manifold edges .*--repair"):
-        prepare_mesh(decimated)
+    with pytest.raises(MeshError, match="non-manifold edges .*refused as strict"):
+        prepare_mesh(decimated, settings=Repairing(strict=True))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshWarning)  # pieces pinched off by the decimation are left out
-        prepared, changes = prepare_mesh(decimated, repair=True)
-        analysis = analyze_mesh(decimated, repair=True)
+        prepared, changes = prepare_mesh(decimated)
+        analysis = analyze_mesh(decimated)
     assert any(c.startswith("split ") and "non-manifold edges" in c for c in changes)
     assert prepared.n_vertices > 0.9 * decimated.n_vertices
     assert not len(nonmanifold_vertices(prepared)) and _edge_counts(prepared.faces, prepared.n_vertices)[1].max() == 2

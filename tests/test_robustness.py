@@ -7,9 +7,9 @@
   the points beyond the boundary missing instead of inventing them; matching the cut shape to the
   uncut pose keeps the correct matches of the extremities the cut did not touch.
 * Repair: duplicate and zero-area faces, unreferenced vertices and flipped faces are fixed by
-  ``--repair`` with one note per change and results still numbered as in the input file;
-  a fin on an edge (a non-manifold edge) is split off; with several components the largest is
-  used with a warning.
+  default with one note per change and results still numbered as in the input file, and
+  refused under ``--strict``; a fin on an edge (a non-manifold edge) is split off; with several
+  components the largest is used with a warning.
 * Noise: vertex noise that crumples the surface is detected, said in a warning, and smoothed away
   before analysis; the matches stay correct where the unsmoothed analysis goes wrong.
 """
@@ -430,9 +430,9 @@ def test_unreferenced_vertex_at_index_0_is_dropped_and_indices_stay_the_files(ca
     mesh, clean = clean_wolf
     path = tmp_path / "shifted.off"
     save_mesh(Mesh(np.vstack([[[500.0, 500.0, 500.0]], mesh.vertices]), mesh.faces + 1), path)
+    code, out, err = run(capsys, "features", path, "--strict", "--no-cache")
+    assert_one_error_line(code, out, err, path, "refused as strict")
     code, out, err = run(capsys, "features", path, "--no-cache")
-    assert_one_error_line(code, out, err, path, "--repair")
-    code, out, err = run(capsys, "features", path, "--repair", "--no-cache")
     assert code == 0
     assert notes(err) == [f"darcyan: note: {path}: dropped 1 unreferenced vertices"]
     shifted = features_rows(out)
@@ -446,22 +446,23 @@ def test_duplicate_and_zero_area_faces_are_dropped_with_notes(capsys, tmp_path, 
     extra = np.array([[a, b, c], [b, c, a], [a, a, b]])  # a duplicate, the same rotated, a zero-area face
     path = tmp_path / "dirty.off"
     save_mesh(Mesh(mesh.vertices, np.vstack([mesh.faces, extra])), path)
-    code, out, err = run(capsys, "features", path, "--repair", "--no-cache")
+    assert_one_error_line(*run(capsys, "features", path, "--strict", "--no-cache"), path, "duplicate faces")
+    code, out, err = run(capsys, "features", path, "--no-cache")
     assert code == 0
     assert notes(err) == [f"darcyan: note: {path}: dropped 2 duplicate faces",
                           f"darcyan: note: {path}: dropped 1 degenerate (zero-area) faces"]
     assert features_rows(out) == clean
 
 
-def test_flipped_faces_are_reoriented_on_repair(capsys, tmp_path, clean_wolf):
+def test_flipped_faces_are_reoriented_by_default(capsys, tmp_path, clean_wolf):
     mesh, clean = clean_wolf
     faces = mesh.faces.copy()
     flipped = np.arange(100, 1100, 100)
     faces[flipped] = faces[flipped, ::-1]
     path = tmp_path / "flipped.off"
     save_mesh(Mesh(mesh.vertices, faces), path)
-    assert_one_error_line(*run(capsys, "features", path, "--no-cache"), path, "consistently oriented")
-    code, out, err = run(capsys, "features", path, "--repair", "--no-cache")
+    assert_one_error_line(*run(capsys, "features", path, "--strict", "--no-cache"), path, "consistently oriented")
+    code, out, err = run(capsys, "features", path, "--no-cache")
     assert code == 0
     assert notes(err) == [f"darcyan: note: {path}: reoriented {len(flipped)} faces to agree with their neighbours"]
     repaired = features_rows(out)
@@ -469,17 +470,17 @@ def test_flipped_faces_are_reoriented_on_repair(capsys, tmp_path, clean_wolf):
     np.testing.assert_allclose([a for _, a in repaired], [a for _, a in clean], rtol=1e-5)
 
 
-def test_non_manifold_edge_is_an_error_without_repair_and_split_off_with_it(capsys, tmp_path, clean_wolf):
+def test_non_manifold_edge_is_split_off_by_default_and_an_error_as_strict(capsys, tmp_path, clean_wolf):
     mesh, clean = clean_wolf
     a, b, _ = mesh.faces[0]
     apex = mesh.vertices[[a, b]].mean(axis=0) + [0.0, 0.0, 5.0]
     path = tmp_path / "fin.off"
     faces = np.vstack([mesh.faces, [[a, b, mesh.n_vertices]]])  # a fin: edge a-b now has three faces
     save_mesh(Mesh(np.vstack([mesh.vertices, apex]), faces), path)
-    code, out, err = run(capsys, "features", path, "--no-cache")
+    code, out, err = run(capsys, "features", path, "--strict", "--no-cache")
     assert_one_error_line(code, out, err, path, "non-manifold edges")
-    assert "--repair" in err
-    code, out, err = run(capsys, "features", path, "--repair", "--no-cache")
+    assert "strict" in err
+    code, out, err = run(capsys, "features", path, "--no-cache")
     assert code == 0
     assert notes(err) == [f"darcyan: note: {path}: split 1 non-manifold edges (more than two faces on one "
                           f"edge) into pairs of faces"]

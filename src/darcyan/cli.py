@@ -57,7 +57,8 @@ def _add_config_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--config", metavar="JSON",
                        help="a JSON file of settings to change (method parameters by name, sections such as "
                             "{\"mirror\": {\"samples\": 400}} in part; see darcyan.DarcyanConfig); options given beside it still apply")
-    parser.add_argument("--repair", action="store_true", help="weld coincident boundary vertices (triangle soups), drop duplicate/degenerate faces and unreferenced vertices, split non-manifold edges and reorient faces instead of refusing them")
+    parser.add_argument("--repair", action="store_true", help="also weld coincident boundary vertices (triangle soups, seams of textured files) instead of refusing them")
+    parser.add_argument("--strict", action="store_true", help="refuse the ordinary imperfections that are otherwise repaired with a note (duplicate or zero-area faces, unreferenced vertices, edges of three or more faces, inconsistent orientation)")
     parser.add_argument("--no-cache", action="store_true", help="do not read or write the per-shape cache ($DARCYAN_CACHE)")
     parser.add_argument("--threads", type=int, default=1, metavar="N",
                         help="BLAS/OpenMP threads (default %(default)s: the work is not BLAS-bound, and more threads "
@@ -76,6 +77,10 @@ def _config(args: argparse.Namespace) -> DarcyanConfig:
     values = {name: getattr(args, name) for name in CONFIG_HELP if getattr(args, name, None) is not None}
     if getattr(args, "matching", None):
         values["matching"] = args.matching
+    if getattr(args, "strict", False):
+        if getattr(args, "repair", False):
+            raise DarcyanError("--strict refuses what --repair mends: give one of them")
+        values["repairing"] = dataclasses.replace(base.repairing, strict=True)
     return base.replace(**values)
 
 

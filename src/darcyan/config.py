@@ -61,7 +61,7 @@ class Denoising:
 
 @dataclass(frozen=True)
 class Repairing:
-    """What ``--repair`` / ``repair=True`` takes for one point and for no face
+    """How a mesh is repaired: what ``--repair`` / ``repair=True`` takes for one point and for no face
     (:func:`darcyan.geometry.repair.prepare_mesh`).
 
     Attributes:
@@ -69,7 +69,10 @@ class Repairing:
             one point: copies of a vertex written by one program agree to the last digits, real
             edges are ~1e6 times longer. 0: never weld.
         degenerate_area: a face whose area is below this fraction of the mean face area is
-            degenerate (dropped under repair, refused without).
+            degenerate (dropped, with a note).
+        strict: refuse the ordinary imperfections that are otherwise repaired with a note
+            (duplicate and degenerate faces, unreferenced vertices, non-manifold edges,
+            inconsistent orientation, a surface that cannot be oriented): ``--strict``.
         outward_cap_share: with or without repair, a surface whose faces enclose a negative
             volume (it is inside out) gets every face flipped: its orientation decides left from
             right. A surface with holes or cuts is closed for that test by a fan across each
@@ -92,6 +95,7 @@ class Repairing:
 
     weld_tolerance: float = _stage(1e-6, PREPARE)
     degenerate_area: float = _stage(1e-12, PREPARE)
+    strict: bool = _stage(False, PREPARE)
     outward_cap_share: float = _stage(0.25, PREPARE)
     hole_length: float = _stage(0.1, PREPARE)
     hole_edges: int = _stage(4, PREPARE)
@@ -100,6 +104,7 @@ class Repairing:
         _check(self, ("weld_tolerance", "degenerate_area"), lambda v: _number(v) and 0 <= v < 1, "in [0, 1)")
         _check(self, ("outward_cap_share", "hole_length"), lambda v: _number(v) and v >= 0, "non-negative")
         _check(self, ("hole_edges",), lambda v: _integer(v) and v >= 0, "a non-negative integer")
+        _check(self, ("strict",), lambda v: isinstance(v, bool), "true or false")
 
 
 @dataclass(frozen=True)

@@ -8,13 +8,14 @@ refuse anything else), in this order:
 2. coincident vertices on the boundary: welded under ``repair`` (:func:`weld_vertices`); a
    triangle soup (faces that share no vertex) or a surface split along seams is refused without
    it, with a message saying so;
-3. repairable defects (:func:`inspect_mesh`): duplicate and degenerate faces, unreferenced
-   vertices, non-manifold edges (more than two faces on one edge). Without ``repair`` they are one
-   error naming the option; with it faces and vertices are dropped and edges split apart;
+3. ordinary imperfections (:func:`inspect_mesh`): duplicate and degenerate faces, unreferenced
+   vertices, non-manifold edges (more than two faces on one edge): faces and vertices dropped and
+   edges split apart, each with a note; refused only under ``Repairing.strict`` (``--strict``);
 4. non-manifold vertices (fans of faces meeting only at one vertex, "bow ties") are always split,
    one copy of the vertex per fan (:func:`split_nonmanifold`), with a :class:`MeshWarning`;
 5. the largest connected component, with a warning about what was left out;
-6. orientation: made consistent under ``repair``; then, with or without it, small holes
+6. orientation: made consistent (unless strict), and a surface that cannot be oriented cut
+   open where its faces disagree; then small holes
    closed (:func:`fill_small_holes`) and the faces turned outward
    (:func:`orient_outward`; the cuts left are closed for that test by a fan across each, a patch
    is left as it comes), each with a note.
@@ -102,10 +103,11 @@ def inspect_mesh(mesh: Mesh, degenerate_area: float = Repairing().degenerate_are
 def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairing()) -> tuple[Mesh, list[str]]:
     """Make ``mesh`` ready for analysis (see the module docstring for the steps).
 
-    Without ``repair``, a triangle soup, duplicate faces, degenerate faces, unreferenced vertices,
-    non-manifold edges and inconsistently oriented faces are errors that name the fix; with it
-    coincident boundary vertices are welded, the faces and vertices dropped, the edges split and
-    the faces reoriented, and each change described in the returned list. Non-manifold vertices are split
+    Duplicate faces, degenerate faces, unreferenced vertices, non-manifold edges and
+    inconsistently oriented faces are repaired (faces and vertices dropped, edges split, faces
+    reoriented, a surface that cannot be oriented cut open), each change described in the
+    returned list; under ``settings.strict`` they are errors. A triangle soup and a surface
+    split along seams are refused without ``repair``, which welds coincident boundary vertices. Non-manifold vertices are split
     either way, and with several connected components the largest (by area) is kept, each with a
     :class:`MeshWarning`.
 
@@ -115,6 +117,7 @@ def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairi
     """
     check_mesh(mesh)
     changes: list[str] = []
+    ordinary = repair or not settings.strict  # the ordinary imperfections are repaired unless strict
     if repair:
         before = mesh.n_vertices
         mesh = weld_vertices(mesh, settings.weld_tolerance)
@@ -134,10 +137,10 @@ def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairi
     if len(report.unreferenced_vertices):
         droppable.append(f"{len(report.unreferenced_vertices)} unreferenced vertices")
     edges = f"{report.nonmanifold_edges} non-manifold edges (more than two faces on one edge)"
-    if not repair and (droppable or report.nonmanifold_edges):
+    if not ordinary and (droppable or report.nonmanifold_edges):
         problems = droppable + [edges] * bool(report.nonmanifold_edges)
-        fix = "drop or split them" if report.nonmanifold_edges else "drop them"
-        raise MeshError(mesh.name, ", ".join(problems) + f" (use --repair / repair=True to {fix})")
+        fix = "dropped or split" if report.nonmanifold_edges else "dropped"
+        raise MeshError(mesh.name, ", ".join(problems) + f" (refused as strict; by default they are {fix})")
     if droppable:
         keep = np.ones(mesh.n_faces, bool)
         keep[report.duplicate_faces] = False
@@ -152,14 +155,15 @@ def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairi
     mesh = _largest_component(mesh)
 
     if not _consistently_oriented(mesh.faces, mesh.n_vertices):
-        if not repair:
+        if not ordinary:
             raise MeshError(mesh.name, "faces are not consistently oriented (an edge is used twice in "
-                                       "the same direction); use --repair / repair=True to reorient them")
+                                       "the same direction; refused as strict, by default they are reoriented)")
         mesh, flipped = _orient_consistently(mesh)
-        if not _consistently_oriented(mesh.faces, mesh.n_vertices):
-            raise MeshError(mesh.name, "the surface is not orientable (a Moebius strip?): no choice of "
-                                       "face orientations agrees along every edge")
         changes.append(f"reoriented {flipped} faces to agree with their neighbours")
+        if not _consistently_oriented(mesh.faces, mesh.n_vertices):
+            mesh, cut = _cut_where_orientations_disagree(mesh)
+            changes.append(f"dropped {cut} faces along edges where no choice of face orientations agrees "
+                           f"(the surface as given is not orientable: a Moebius strip, or faces folded over)")
     mesh, holes, added, loops = fill_small_holes(mesh, settings.hole_length, settings.hole_edges,
                                                  degenerate_area=settings.degenerate_area)
     if holes:
@@ -451,6 +455,31 @@ def _orient_consistently(mesh: Mesh) -> tuple[Mesh, int]:
     if flipped.sum() * 2 > len(faces):
         faces, flipped = faces[:, ::-1].copy(), ~flipped
     return Mesh(mesh.vertices, faces, mesh.name, mesh.input_index), int(flipped.sum())
+
+
+def _cut_where_orientations_disagree(mesh: Mesh) -> tuple[Mesh, int]:
+    """``(mesh, faces dropped)``: a surface that no choice of face orientations makes agree (a
+    Moebius strip; a few faces folded back along a scan's rim) cut open along the edges where
+    the breadth-first orientation still disagrees, by dropping one face of each (the later one),
+    then reoriented; at most :data:`TANGLE_ROUNDS` rounds, then refused."""
+    dropped = 0
+    for _ in range(TANGLE_ROUNDS):
+        faces, n = mesh.faces, mesh.n_vertices
+        directed = faces.ravel() * n + faces[:, [1, 2, 0]].ravel()
+        order = np.argsort(directed, kind="stable")
+        repeated = order[1:][directed[order][1:] == directed[order][:-1]]  # the later use of each edge
+        keep = np.ones(len(faces), bool)
+        keep[np.unique(repeated // 3)] = False
+        dropped += int((~keep).sum())
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", MeshWarning)  # the cut's own slivers: counted as dropped faces
+            mesh, _ = split_nonmanifold(Mesh(mesh.vertices, faces[keep], mesh.name, mesh.input_index))
+            mesh = _largest_component(mesh)
+        mesh, _ = _orient_consistently(mesh)
+        if _consistently_oriented(mesh.faces, mesh.n_vertices):
+            return mesh, dropped
+    raise MeshError(mesh.name, "the surface is not orientable (a Moebius strip?): no choice of face "
+                               "orientations agrees along every edge, and cutting it open did not help")
 
 
 def fill_small_holes(mesh: Mesh, max_length: float, max_edges: int, loops: list | None = None,
