@@ -112,7 +112,7 @@ def test_the_unmutated_files_load(folder):
         check_loads_or_mesh_error(folder, kind, VALID[kind])
         path = folder / f"fuzz{_extension(kind)}"
         mesh = load_mesh(path)
-        if kind.endswith(".stl"):  # a triangle soup: the same corners, each face its own
+        if kind.endswith(".stl"):  # corners at one point are one vertex, in file order
             np.testing.assert_allclose(mesh.vertices[mesh.faces], VERTICES[FACES])
             continue
         np.testing.assert_allclose(mesh.vertices, VERTICES)

@@ -66,7 +66,7 @@ def test_polygons_are_split_with_a_warning(tmp_path):
 
 
 @pytest.mark.parametrize("encoding", ["binary", "ascii"])
-def test_stl_is_read_as_the_triangle_soup_trimesh_writes(tmp_path, encoding):
+def test_stl_corners_at_one_point_are_one_vertex_in_file_order(tmp_path, encoding):
     import trimesh
 
     mesh = synthetic.icosphere(2)
@@ -77,8 +77,17 @@ def test_stl_is_read_as_the_triangle_soup_trimesh_writes(tmp_path, encoding):
     corners = mesh.vertices[mesh.faces]
     if encoding == "binary":  # binary STL stores float32
         corners = corners.astype(np.float32).astype(np.float64)
-    assert back.n_faces == mesh.n_faces and back.n_vertices == 3 * mesh.n_faces  # nothing welded
+    assert back.n_faces == mesh.n_faces and back.n_vertices == mesh.n_vertices  # every shared corner one vertex
     np.testing.assert_array_equal(back.vertices[back.faces], corners)
+    first_corner = {}
+    for corner, vertex in enumerate(mesh.faces.ravel()):  # the file's order: vertex of each first corner
+        first_corner.setdefault(int(vertex), corner)
+    order = sorted(first_corner, key=first_corner.get)
+    expected = mesh.vertices[order]
+    if encoding == "binary":
+        expected = expected.astype(np.float32).astype(np.float64)
+    np.testing.assert_array_equal(back.vertices, expected)
+    prepare_mesh(back, settings=Repairing(strict=True))  # a closed surface: nothing left to repair
 
 
 

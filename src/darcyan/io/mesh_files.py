@@ -516,8 +516,9 @@ def _check_ply_ascii(text: str, elements: dict, path: Path, header_lines: int) -
 
 
 def _read_stl(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """STL, binary or ASCII, as trimesh reads it: a triangle soup, three vertices of its own per
-    face (an ASCII file may hold several solids)."""
+    """STL, binary or ASCII, as trimesh reads it (an ASCII file may hold several solids). STL has
+    no shared vertices, only each face's three corners: corners at exactly the same point are one
+    vertex, numbered in the order of their first corner in the file (:func:`_shared_corners`)."""
     announced = int.from_bytes(data[80:84], "little") if len(data) >= 84 else 0
     binary = len(data) == 84 + 50 * announced  # trimesh's test
     text = "" if binary else data.decode("utf-8", "replace").lower()
@@ -533,7 +534,18 @@ def _read_stl(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     if not binary and (text.count("vertex") != len(vertices) or 3 * text.count("endfacet") != len(vertices)):
         raise MeshError(path, f"ASCII STL with {text.count('endfacet')} facets and {text.count('vertex')} 'vertex' "
                               f"lines, {len(vertices)} vertices read: every facet needs 3 vertices of 3 numbers")
-    return vertices, np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
+    return _shared_corners(vertices)
+
+
+def _shared_corners(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(vertices (n, 3), faces (m, 3))`` from a triangle soup's corners ``(3 m, 3)``: corners at
+    exactly the same point are one vertex (no tolerance: a file's copies of a point are written
+    from one value), vertices in the order of their first corner."""
+    unique, first, inverse = np.unique(corners, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first, kind="stable")
+    rank = np.empty(len(order), dtype=np.int64)
+    rank[order] = np.arange(len(order))
+    return unique[order], rank[inverse.reshape(-1)].reshape(-1, 3)
 
 
 def _read_gltf(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
