@@ -140,3 +140,17 @@ def test_paper_preset_and_options_beside_it():
     assert DarcyanConfig.paper().matching == "nearest" and DarcyanConfig.paper().agd_smoothing == 0
     mixed = _config(parse(["bench", "data", "--paper", "--radius", "0.08", "--matching", "one-to-one"]))
     assert mixed == DarcyanConfig.paper(radius=0.08, matching="one-to-one")
+
+
+@pytest.mark.parametrize("argv", [["match", "a.off", "b.off", "-o", "{out}"], ["features", "a.off", "-o", "{out}"],
+                                  ["describe", "a.off", "-o", "{out}"]])
+@pytest.mark.parametrize("out, words", [("m.xyz", "unknown output format '.xyz'"),
+                                        ("missing/m.csv", "cannot write (no such folder)")])
+def test_the_output_is_checked_before_any_work(capsys, tmp_path, argv, out, words):
+    """The input files do not exist: the error names the output, so it was checked first."""
+    output = str(tmp_path / out)
+    code, stdout, err = run(capsys, *[a.format(out=output) for a in argv])
+    assert code == 2 and stdout == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"darcyan: error: {output}: {words}"), err
+    assert "a.off" not in err

@@ -144,6 +144,8 @@ def cmd_match(args: argparse.Namespace) -> int:
     if several and args.dense:
         _dense_folder(args.output, targets)
     form = _output_format(args)
+    if not (several and args.dense):
+        _check_output(args.output, ("", ".csv", ".json", ".txt"))
     cache = _cache(args)
     if args.truth:
         from .eval.metrics import read_truth, score_matches
@@ -260,6 +262,24 @@ def _dense_folder(output: str | None, targets: list) -> None:
         raise DarcyanError(f"{output}: cannot make the folder for the maps ({exc.strerror or exc})") from None
 
 
+def _check_output(output: str | None, suffixes: tuple) -> None:
+    """Before any work: a file ``-o`` names has one of ``suffixes`` (the formats written; none:
+    CSV) and can be written (its folder exists and takes files, the file itself if it exists)."""
+    import os
+
+    if output is None or output == "-":
+        return
+    path = Path(output)
+    if path.suffix.lower() not in suffixes:
+        raise DarcyanError(f"{output}: unknown output format {path.suffix!r} (write "
+                           f"{' or '.join(x for x in suffixes if x) or 'CSV'})")
+    folder = path.resolve().parent
+    if not folder.is_dir():
+        raise DarcyanError(f"{output}: cannot write (no such folder)")
+    if path.is_dir() or not os.access(path if path.exists() else folder, os.W_OK):
+        raise DarcyanError(f"{output}: cannot write ({'a folder' if path.is_dir() else 'permission denied'})")
+
+
 def _output_format(args: argparse.Namespace) -> str:
     """``--format``, else ``json`` for an ``-o *.json``, else ``csv``."""
     if args.format:
@@ -366,6 +386,7 @@ def cmd_show_grid(args: argparse.Namespace) -> int:
 def cmd_features(args: argparse.Namespace) -> int:
     from .method.pipeline import describe_shape
 
+    _check_output(args.output, ("", ".csv", ".txt"))
     shape = describe_shape(args.mesh, _config(args), args.repair, _cache(args))
     _note_changes(shape)
     lines = ["vertex,agd"] + [f"{v},{a:.6g}" for v, a in zip(shape.feature_vertices, shape.feature_agd)]
@@ -377,6 +398,7 @@ def cmd_describe(args: argparse.Namespace) -> int:
     from .method.pipeline import describe_shape
 
     config = _config(args)
+    _check_output(args.output, (".npz", ".csv"))
     shape = describe_shape(args.mesh, config, args.repair, _cache(args))
     _note_changes(shape)
     out = Path(args.output)
