@@ -357,3 +357,7 @@ def test_binary_ply_with_a_negative_list_length_is_one_error(tmp_path):
     path.write_bytes(header + body)
     with pytest.raises(MeshError, match="negative.ply"):
         load_mesh(path)
+
+
+def test_a_mesh_is_shown_by_its_name_and_size():
+    assert repr(Mesh(TETRA_V, TETRA_F, "tetra")) == "Mesh('tetra', 4 vertices, 4 faces)"

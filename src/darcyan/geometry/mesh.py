@@ -44,6 +44,9 @@ class Mesh:
     name: str = "<mesh>"
     input_index: np.ndarray = field(default=None)  # type: ignore[assignment]
 
+    def __repr__(self) -> str:
+        return f"Mesh({self.name!r}, {self.n_vertices} vertices, {self.n_faces} faces)"
+
     def __post_init__(self) -> None:
         v = np.ascontiguousarray(self.vertices, dtype=np.float64)
         f = np.ascontiguousarray(self.faces, dtype=np.int64)

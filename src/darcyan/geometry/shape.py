@@ -181,6 +181,9 @@ def prepare_shape(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: b
     """
     prepared, changes = prepare_mesh(mesh, repair, config.repairing)
     prepared, steps, area_ratio = denoise_mesh(prepared, config.denoise_area_ratio, config.denoising)
+    if steps and not prepared.area() > 0:  # a smoothed copy of a few faces shrinks to nothing
+        raise MeshError(mesh.name, f"mesh too small or coarse for a Darcyan grid ({mesh.n_vertices} vertices, "
+                                   f"{mesh.n_faces} faces)")
     if steps:
         warnings.warn(f"{mesh.name}: the surface is crumpled at the scale of its edges (its area is "
                       f"{area_ratio:.2f} times that of a smoothed copy: vertex noise?); analysed after "
