@@ -178,7 +178,7 @@ def table(records: list) -> str:
     for key in keys:
         group = [r for r in records if (r["dataset"], r["kind"], r["direction"]) == key and "error" not in r]
         failed = sum(1 for r in records if (r["dataset"], r["kind"], r["direction"]) == key and "error" in r)
-        total = lambda name: sum(r[name] for r in group)  # noqa: E731
+        total = lambda name, group=group: sum(r[name] for r in group)  # noqa: E731
         matches, correct, matchable = total("matches"), total("correct"), total("matchable")
         rate = f"{correct / matches:.1%}" if matches else "-"
         coverage = f"{min(correct, matchable) / matchable:.1%}" if matchable else "-"

@@ -609,7 +609,8 @@ def main(argv: list[str] | None = None) -> int:
         for label in args.sizes:
             files = [str(DATA / p) for p in PAIRS[label]]
             base = stages[label]
-            say(f"| {label} | darcyan | {fmt(base['wall'])} | {fmt(base['cpu'])} | {fmt(base['process']['peak_mb'], 0)} | 1 | 1 | see the stage table |")
+            peak = fmt(base['process']['peak_mb'], 0)
+            say(f"| {label} | darcyan | {fmt(base['wall'])} | {fmt(base['cpu'])} | {peak} | 1 | 1 | see the stage table |")
             raw["peers"][label] = {}
             for peer in peers:
                 if peer == "pyfm":

@@ -3,8 +3,7 @@ sparse matches give fewer than three consistent landmarks."""
 
 import numpy as np
 import pytest
-from conftest import (DENSE_MAX_MEAN, DENSE_MIN_RATE, DENSE_SCORED, FAST_DENSE, moved_and_mirrored_tip_fields,
-                      tip_correspondence)
+from conftest import DENSE_MAX_MEAN, DENSE_MIN_RATE, DENSE_SCORED, FAST_DENSE, moved_and_mirrored_tip_fields, tip_correspondence
 
 from darcyan.cli import main
 from darcyan.dense.landmarks import orientation_coordinates

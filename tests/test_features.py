@@ -113,8 +113,8 @@ def test_heat_kernel_diagonal_on_sphere_is_the_spherical_harmonics_sum(sphere):
     mesh, _ = normalize_mesh(mesh)
     length = DarcyanConfig().agd_smoothing
     t = length**2 / 2
-    l = np.arange(200)
-    exact = float(((2 * l + 1) * np.exp(-4 * np.pi * l * (l + 1) * t)).sum())
+    degree = np.arange(200)
+    exact = float(((2 * degree + 1) * np.exp(-4 * np.pi * degree * (degree + 1) * t)).sum())
     heat = heat_kernel_diagonal(mesh, length)
     np.testing.assert_allclose(heat, exact, rtol=0.02)
     assert heat.std() < 0.005 * heat.mean()

@@ -20,7 +20,7 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 from darcyan.errors import MeshError  # noqa: E402
-from darcyan.geometry.mesh import Mesh
+from darcyan.geometry.mesh import Mesh  # noqa: E402
 from darcyan.io.mesh_files import load_mesh  # noqa: E402
 
 # An octahedron with one quad split: small enough to mutate densely, big enough to pass check_mesh.

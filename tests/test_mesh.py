@@ -3,12 +3,10 @@
 
 import numpy as np
 import pytest
-
-from darcyan.config import Repairing
 from conftest import noisy_copy
 
 from darcyan import MeshError, MeshWarning
-from darcyan.config import Denoising
+from darcyan.config import Denoising, Repairing
 from darcyan.geometry import synthetic
 from darcyan.geometry.denoise import denoise_mesh, surface_roughness, taubin_smooth
 from darcyan.geometry.mesh import Mesh, normalize_mesh

@@ -11,7 +11,7 @@ L2 nearest-neighbour matching.
     >>> matches = darcyan.match_shapes(shape_1, shape_2)      # doctest: +SKIP
 """
 
-from ._version import __version__  # noqa: E402
+from ._version import __version__  # noqa: F401 (darcyan.__version__)
 from .config import DarcyanConfig
 from .errors import ConfigError, DarcyanError, DependencyError, MeshError
 from .geometry.curvature import Curvatures, principal_curvatures
@@ -40,7 +40,8 @@ from .method.pipeline import (
 __all__ = [
     "AGD", "ConfigError", "Correspondence", "Curvatures", "DarcyanConfig", "DarcyanError", "DarcyanGrid",
     "DependencyError", "FeaturePoints", "GeodesicSolver", "Matches", "Mesh", "MeshError", "MeshWarning",
-    "Shape", "ShapeAnalysis", "ShapeCache", "ShapeDescription", "analyze_mesh", "analyze_shape", "average_geodesic_distance", "curvature_descriptor",
+    "Shape", "ShapeAnalysis", "ShapeCache", "ShapeDescription", "analyze_mesh", "analyze_shape",
+    "average_geodesic_distance", "curvature_descriptor",
     "curvature_descriptors", "darcyan_grid", "darcyan_grids", "describe_shape", "descriptor_distances",
     "extremities", "load_mesh", "load_shape", "match_descriptors", "match_files", "match_shapes", "normalize_mesh",
     "prepare_mesh", "prepare_shape", "principal_curvatures", "save_mesh",

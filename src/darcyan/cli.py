@@ -36,11 +36,13 @@ CONFIG_HELP = {
     "proxy_vertices": "AGD of larger meshes is computed on a copy decimated to this many vertices, 0 = never",
     "extremity_radius": "AGD maxima are maxima within this geodesic radius",
     "min_agd_quantile": "ignore AGD maxima below this quantile of AGD",
-    "tip_gain": "move a feature point to its extremity's sharpest tip (heat kernel at the AGD smoothing's scale) where that is this many times sharper, 0 = never",
+    "tip_gain": "move a feature point to its extremity's sharpest tip (heat kernel at the AGD smoothing's scale) "
+                "where that is this many times sharper, 0 = never",
     "tip_radius": "an extremity's top lies within this geodesic radius of its feature point",
     "tip_agd_drop": "an extremity's top: the vertices within --tip-radius whose AGD is at most this much below the feature point's",
     "max_features": "at most this many feature points, 0 = all",
-    "max_match_distance": "leave out matches whose descriptor distance exceeds this multiple of the median over all feature-point pairs, 0 = keep all",
+    "max_match_distance": "leave out matches whose descriptor distance exceeds this multiple of the median over all "
+                          "feature-point pairs, 0 = keep all",
 }
 
 
@@ -57,8 +59,13 @@ def _add_config_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--config", metavar="JSON",
                        help="a JSON file of settings to change (method parameters by name, sections such as "
                             "{\"mirror\": {\"samples\": 400}} in part; see darcyan.DarcyanConfig); options given beside it still apply")
-    parser.add_argument("--repair", action="store_true", help="also weld coincident boundary vertices (triangle soups, seams of textured files) instead of refusing them")
-    parser.add_argument("--strict", action="store_true", help="refuse the ordinary imperfections that are otherwise repaired with a note (duplicate or zero-area faces, unreferenced vertices, edges of three or more faces, inconsistent orientation)")
+    parser.add_argument("--repair", action="store_true",
+                        help="also weld coincident boundary vertices (triangle soups, seams of textured files) instead "
+                             "of refusing them")
+    parser.add_argument("--strict", action="store_true",
+                        help="refuse the ordinary imperfections that are otherwise repaired with a note (duplicate or "
+                             "zero-area faces, unreferenced vertices, edges of three or more faces, inconsistent "
+                             "orientation)")
     parser.add_argument("--no-cache", action="store_true", help="do not read or write the per-shape cache ($DARCYAN_CACHE)")
     parser.add_argument("--threads", type=int, default=1, metavar="N",
                         help="BLAS/OpenMP threads (default %(default)s: the work is not BLAS-bound, and more threads "
@@ -164,7 +171,7 @@ def cmd_match(args: argparse.Namespace) -> int:
         score = dense = None
         prepared: list = []  # both shapes, prepared once for everything below that needs them
 
-        def shapes_of(target=target):
+        def shapes_of(target=target, prepared=prepared):
             nonlocal source_shape
             if not prepared:
                 if source_shape is None:
@@ -542,7 +549,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("dataset", metavar="DATASET_DIR", help="folder of meshes named {class}{pose}")
     p.add_argument("--pairs", metavar="FILE", help="tab-separated 'source<TAB>target' lines (default: every ordered pair within a class)")
     p.add_argument("--method", nargs="+", choices=METHODS, default=["darcyan"], help="methods to evaluate (default darcyan)")
-    p.add_argument("--threshold", type=float, default=DEFAULT_THRESHOLD, help="a match is correct when its geodesic error / sqrt(area) is at most this (default %(default)s)")
+    p.add_argument("--threshold", type=float, default=DEFAULT_THRESHOLD,
+                   help="a match is correct when its geodesic error / sqrt(area) is at most this (default %(default)s)")
     p.add_argument("--out", default="bench-results", help="output folder (default %(default)s)")
     p.add_argument("--jobs", type=int, default=1, help="local worker processes (default %(default)s)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on a dask.distributed scheduler (pip install 'darcyan[dask]')")
@@ -553,8 +561,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dense-samples", type=int, default=DENSE_SAMPLE, metavar="N",
                    help=f"source vertices scored per pair with --dense, drawn at random with seed {DENSE_SEED} "
                         "(among the listed corres/*.vts samples for vts data) (default %(default)s)")
-    p.add_argument("--laplacian", choices=("cotangent", "robust"), default="cotangent", help="Laplace-Beltrami operator of hks/wks (default %(default)s)")
-    p.add_argument("--matching", choices=MATCHING_MODES, help=f"descriptor matching of darcyan/hks/wks (default {DarcyanConfig().matching})")
+    p.add_argument("--laplacian", choices=("cotangent", "robust"), default="cotangent",
+                   help="Laplace-Beltrami operator of hks/wks (default %(default)s)")
+    p.add_argument("--matching", choices=MATCHING_MODES,
+                   help=f"descriptor matching of darcyan/hks/wks (default {DarcyanConfig().matching})")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no table on stdout")
     _add_config_options(p)
     p.set_defaults(func=cmd_bench)

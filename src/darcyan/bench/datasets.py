@@ -62,7 +62,8 @@ def discover_dataset(root: str | os.PathLike) -> Dataset:
             kept, other = sorted([shapes[path.stem], path], key=lambda p: MESH_SUFFIXES.index(p.suffix.lower()))
             if other.suffix.lower() not in SECONDARY_SUFFIXES:
                 raise DarcyanError(f"{root}: two meshes named {path.stem} ({shapes[path.stem].name}, {path.name})")
-            warnings.warn(f"{root}: {other.name} left out: {kept.name} is the mesh named {path.stem}", MeshWarning)
+            warnings.warn(f"{root}: {other.name} left out: {kept.name} is the mesh named {path.stem}", MeshWarning,
+                          stacklevel=2)
             path = kept
         shapes[path.stem] = path
     if not shapes:

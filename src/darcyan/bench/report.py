@@ -244,7 +244,8 @@ def report_markdown(results: dict) -> str:
                          f"of the class, which share one vertex numbering.")
             lines += ["", "| class | pose | residual | used |", "| --- | --- | ---: | --- |"]
             for cls, m in sorted(mirror.items()):
-                lines.append(f"| {cls} | {m['shape']} | {_fmt(m['residual'], 4)} | {'yes' if m['used'] else 'no (no symmetric pose: rate_sym = rate)'} |")
+                used = "yes" if m["used"] else "no (no symmetric pose: rate_sym = rate)"
+                lines.append(f"| {cls} | {m['shape']} | {_fmt(m['residual'], 4)} | {used} |")
         else:
             lines.append("From `corres/*.sym.vts`. Check of the map darcyan derives for identity data (reflection "
                          "of the first pose) against `.sym.vts`: geodesic distance between the derived and the "
@@ -299,7 +300,8 @@ def _dense_report(results: dict) -> list:
     lines.append(f"{chosen.get('samples', '?')} source vertices per pair (seed {chosen.get('seed', '?')}). "
                  "darcyan: the dense map seeded by darcyan's sparse matches, or by an alternative matching "
                  "whose short ZoomOut map keeps the curvature signature clearly better (geodesic landmark coordinates "
-                 "refined by ZoomOut; 'not trusted': the map's own check doubts it); pyfm: pyFM's own pipeline (WKS, 50 x 50 functional map, ZoomOut to "
+                 "refined by ZoomOut; 'not trusted': the map's own check doubts it); pyfm: pyFM's own pipeline "
+                 "(WKS, 50 x 50 functional map, ZoomOut to "
                  "200) without darcyan's landmarks. " + results.get("dense_definition", DENSE_DEFINITION))
     if not dense:
         return lines + ["", "No dense results yet."]

@@ -99,7 +99,8 @@ def _shape_work(task: dict) -> dict:
     if spectral:
         start = time.perf_counter()
         spectrum_arrays, _ = _cached(
-            cache, (digest, "spectrum", settings.laplacian, str(lbo.SPECTRUM_SIZE), f"repair={repair}", settings.config.prepare_fingerprint()),
+            cache, (digest, "spectrum", settings.laplacian, str(lbo.SPECTRUM_SIZE), f"repair={repair}",
+                    settings.config.prepare_fingerprint()),
             lambda: _spectrum_arrays(prepared_shape(path, repair, settings.config), settings.laplacian))
         spectrum = lbo.Spectrum(spectrum_arrays["values"], spectrum_arrays["vectors"].astype(np.float64),
                                       spectrum_arrays["mass"])
@@ -163,7 +164,7 @@ def class_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: ShapeC
     for name in dataset.classes[cls]:
         path = dataset.shapes[name]
         arrays, _ = _cached(cache, (file_digest(path), "mirror", f"repair={repair}", config.prepare_fingerprint()),
-                            lambda: _mirror_arrays(path, repair, config))
+                            lambda path=path: _mirror_arrays(path, repair, config))
         residual = float(arrays["residual"])
         if best["residual"] is None or residual < best["residual"]:
             best = {"shape": name, "residual": residual, "vertices": None}
@@ -200,7 +201,7 @@ def validate_mirror(dataset: Dataset, cls: str, repair: bool = False, cache: Sha
             continue
         path = dataset.shapes[name]
         arrays, _ = _cached(cache, (file_digest(path), "mirror", f"repair={repair}", config.prepare_fingerprint()),
-                            lambda: _mirror_arrays(path, repair, config))
+                            lambda path=path: _mirror_arrays(path, repair, config))
         shape = prepared_shape(path, repair, config)
         listed = read_vts(dataset.vts(name), shape.n_input_vertices)
         listed_sym = read_vts(sym, shape.n_input_vertices)
@@ -409,6 +410,6 @@ def _pyfm_map(job: dict, source: Shape, target: Shape) -> np.ndarray:
     for name, shape in ((job["source_path"], source), (job["target_path"], target)):
         arrays, _ = _cached(cache, (file_digest(name), "pyfm-spectrum", str(pyfm.README_PIPELINE.spectrum),
                                     f"repair={job['settings'].repair}", job["settings"].config.prepare_fingerprint()),
-                            lambda: _pyfm_spectrum_arrays(shape.mesh))
+                            lambda shape=shape: _pyfm_spectrum_arrays(shape.mesh))
         spectra.append((arrays["values"], arrays["vectors"]))
     return baselines.pyfm_point_map(source.mesh, target.mesh, spectra[0], spectra[1])

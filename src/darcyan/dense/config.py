@@ -131,7 +131,8 @@ class DenseConfig:
             is information they do not use (``docs/parameters.md``).
         alignment_length: the deformation follows the map on scales beyond this length (sqrt(area)
             units) and keeps the source's shape below it (the weight of its pull is
-            ``2 / alignment_length^2`` per unit area, each edge counted twice in the rigidity term; :class:`~darcyan.geometry.deformation.ArapDeformation`).
+            ``2 / alignment_length^2`` per unit area, each edge counted twice in the rigidity term;
+            :class:`~darcyan.geometry.deformation.ArapDeformation`).
         alignment_normal_weight: the normals' weight (a length, sqrt(area) units) beside the
             positions in the nearest-point search: a point near the surface of an arm is not
             sent across to the body beside it.

@@ -4,7 +4,8 @@
 level curves, the radial lines and the intersection points coloured by curvature);
 :func:`matches_html` a :class:`darcyan.viz.scenes.MatchScene` (both shapes side by side, each matched
 pair linked by a line of its colour); :func:`dense_html` a :class:`darcyan.viz.scenes.DenseScene`
-(the source coloured by position, the target through the map, and the scored vertices by error). The page needs no network access: plotly.js is written
+(the source coloured by position, the target through the map, and the scored vertices by error).
+The page needs no network access: plotly.js is written
 into the file (about 5 MB). Shapes rotate (drag), zoom (wheel) and pan (right drag); hovering
 a point shows its vertex index (the input file's numbering), curvature and distance.
 
