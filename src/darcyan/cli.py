@@ -477,11 +477,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--ensemble", type=int, metavar="N",
                    help="with --dense: combine N ZoomOut runs from independent surface samples, per vertex the "
                         "medoid of the N images (N >= 3; 1 or 2: one run, the default). With 3: -0.2 to +0.6 point "
-                        "within 0.05, the mean error up to 5%% lower, a match 1.5-1.9x as long (docs/parameters.md)")
+                        "within 0.05, the mean error up to 5%% lower, a match 1.5-1.9x as long (docs/decisions/)")
     p.add_argument("--sampling", choices=("random", "farthest"),
                    help="with --dense: the samples ZoomOut iterates on, drawn at random by area (the default) or "
                         "farthest-point samples, with which the map does not depend on the vertices' numbering "
-                        "(but for --ensemble's other runs, which draw at random; docs/parameters.md)")
+                        "(but for --ensemble's other runs, which draw at random; docs/decisions/)")
     verify = p.add_mutually_exclusive_group()
     verify.add_argument("--verify", action="store_true", help="weigh the feature matches against the other matchings "
                         "the orientation test considered by short dense maps (which keeps the shapes' curvature "

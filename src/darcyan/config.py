@@ -3,7 +3,7 @@
 Lengths are in units of ``sqrt(surface area)``: every mesh is scaled to total area 1 before
 analysis (the paper's scale normalization), so a radius of 0.1 means one tenth of the square
 root of the shape's area whatever the file's units. The defaults and how they were chosen are in
-``docs/parameters.md``.
+``docs/decisions/``.
 """
 
 from __future__ import annotations
@@ -89,7 +89,7 @@ class Repairing:
             point, turned 4 of the 97 FAUST test pairs into left/right swaps. 4 edges: at 8, the
             six-edge holes of 19 tosca-hires meshes were closed too, which swapped one david pair
             and, by changing ZoomOut's random samples, cost michael0 -> michael10's dense map 10
-            points (``docs/parameters.md``, "Small holes"). Anything ``rims.min_length`` (0.1) or
+            points (``docs/decisions/``, "Small holes"). Anything ``rims.min_length`` (0.1) or
             longer may be a cut's rim and stays open. 0: no hole is closed.
     """
 
@@ -157,7 +157,7 @@ class GeodesicMargins:
 @dataclass(frozen=True)
 class Consistency:
     """Weights of :func:`darcyan.method.matching.consistent_candidates`' score; all terms are
-    dimensionless. Chosen on tosca-5k (``docs/parameters.md``): geodesic distances between true
+    dimensionless. Chosen on tosca-5k (``docs/decisions/``): geodesic distances between true
     corresponding feature points change by 4% (median) to 28% (99th percentile) between TOSCA
     poses, hence the wide tolerance.
 
@@ -253,7 +253,7 @@ class CutRims:
     count as cut rims, and no feature point is taken within ``clearance`` of one (nor is one moved
     there as a sharpest tip). Shorter loops are holes that leave the extremity in place: the
     mouth of TOSCA's men (0.05 from end to end, at 0.02 from the head's feature point), the
-    cat's 0.079; limbs cut by the partial benchmark left rims of 0.12 to 2 (docs/parameters.md).
+    cat's 0.079; limbs cut by the partial benchmark left rims of 0.12 to 2 (docs/decisions/).
 
     Attributes:
         min_length: a boundary loop this long (sqrt(area)) or longer is a cut's rim (0: none is).

@@ -1,7 +1,7 @@
 """The final step of a dense map: the source deformed onto the target, then read out in space.
 
 ZoomOut's map is intrinsic: between two bodies, or two meshings of one, the most isometric map
-is not the true one, and intrinsic refinements drift towards it (``docs/parameters.md``). Here
+is not the true one, and intrinsic refinements drift towards it (``docs/decisions/``). Here
 the source mesh is deformed as rigidly as possible towards the images of its vertices
 (:class:`~darcyan.geometry.deformation.ArapDeformation`: it follows the map on the scale of
 limbs and keeps its own shape below it, bends and turns included), and each source vertex is

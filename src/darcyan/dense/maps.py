@@ -75,9 +75,10 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     """A target vertex for every source vertex, seeded by sparse ``correspondence``.
 
     Args:
-        shape_1, shape_2: the prepared shapes (:class:`~darcyan.geometry.shape.Shape`, or a
-            :class:`~darcyan.method.pipeline.ShapeAnalysis`, whose shape is used): their area-1
-            meshes, geodesic solvers and spectra.
+        shape_1: the prepared source shape (:class:`~darcyan.geometry.shape.Shape`, or a
+            :class:`~darcyan.method.pipeline.ShapeAnalysis`, whose shape is used): its area-1
+            mesh, geodesic solver and spectrum.
+        shape_2: the prepared target shape, likewise.
         correspondence: anything with ``source_vertex (k,)`` and ``target_vertex (k,)`` in input
             numbering (a :class:`~darcyan.method.pipeline.Correspondence`; ``distance (k,)``
             breaks ties between landmark sets).

@@ -32,7 +32,7 @@ def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = Den
     (``correspondence.alternatives``) whose short ZoomOut map keeps the curvature signature
     clearly better (see :class:`~darcyan.dense.config.DenseConfig`: ``candidates``, ``seed_margin``). Scored on a
     spectrum of the short ZoomOuts' size (:func:`seed_scoring_config`), where :func:`~darcyan.dense.maps.dense_map`
-    scores on its full basis: the same seed on every pair compared (``docs/parameters.md``), not
+    scores on its full basis: the same seed on every pair compared (``docs/decisions/``), not
     by construction. Costs the two shapes' 30 first eigenfunctions and a short ZoomOut per
     candidate (choosing the seed of a 5k pair: 0.45 s, against 1.34 s on the full basis).
     ``full_basis``: score on the dense map's full basis instead, exactly as :func:`~darcyan.dense.maps.dense_map`
@@ -60,7 +60,7 @@ def seed_scoring_config(config: DenseConfig) -> DenseConfig:
     up to sign (which the short ZoomOuts' maps do not depend on), but for the last few, mixed
     with their neighbours beyond the cut: the seeds' scores move by up to 0.4% on the 5k sets'
     300 test pairs and 1.2% on 7 tosca-hires pairs, and the chosen seed is the same on all of
-    them (``docs/parameters.md``)."""
+    them (``docs/decisions/``)."""
     short = min(config.seed_basis, config.basis_size)
     return dataclasses.replace(config, basis_size=short, basis_start=min(config.basis_start, short), basis_margin=0)
 

@@ -52,7 +52,8 @@ def spectral_matching(shape_1, shape_2, config: DenseConfig, samples: tuple, bas
     """Landmark matches read from the best of the short spectral maps (see the module's text).
 
     Args:
-        shape_1, shape_2: prepared shapes.
+        shape_1: the prepared source shape.
+        shape_2: the prepared target shape.
         config: ``start_dimensions``, ``start_landmarks``, ``start_checked``, ``seed_basis``,
             ``seed_samples`` and the ZoomOut terms.
         samples: both shapes' ZoomOut samples ``(s_i,)``; the short maps run on a spread subset.

@@ -116,7 +116,7 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
     ``reach`` samples nearest (in space) to its nearest sample (in the embedding). Not exact: on
     a smooth embedding of a sphere with 16 cells it finds the row of the full search for 99.8%
     of the queries, and on a 52k-vertex dense map the map's error is that of the full search to
-    within 2% (``docs/parameters.md``).
+    within 2% (``docs/decisions/``).
     """
     from scipy.spatial import cKDTree
 

@@ -88,7 +88,7 @@ def drop_dissimilar(matches: Matches, desc_1: np.ndarray, desc_2: np.ndarray, li
 
     A layout-keeping matching can pair a feature point that has no counterpart on the other
     shape (a cat's ear against its nose) with whatever fits the layout; the descriptors of such
-    a pair differ more than those of most unrelated extremities (docs/parameters.md).
+    a pair differ more than those of most unrelated extremities (docs/decisions/).
     """
     if limit <= 0 or len(matches) == 0:
         return matches
