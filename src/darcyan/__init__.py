@@ -36,6 +36,7 @@ from .method.pipeline import (
                               match_files,
                               match_shapes,
 )
+from .parallel import get_threads, set_threads
 
 __all__ = [
     "AGD", "ConfigError", "Correspondence", "Curvatures", "DarcyanConfig", "DarcyanError", "DarcyanGrid",
@@ -44,5 +45,5 @@ __all__ = [
     "average_geodesic_distance", "curvature_descriptor",
     "curvature_descriptors", "darcyan_grid", "darcyan_grids", "describe_shape", "descriptor_distances",
     "extremities", "load_mesh", "load_shape", "match_descriptors", "match_files", "match_shapes", "normalize_mesh",
-    "prepare_mesh", "prepare_shape", "principal_curvatures", "save_mesh",
+    "get_threads", "prepare_mesh", "prepare_shape", "principal_curvatures", "save_mesh", "set_threads",
 ]

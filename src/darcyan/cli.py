@@ -67,9 +67,9 @@ def _add_config_options(parser: argparse.ArgumentParser) -> None:
                              "zero-area faces, unreferenced vertices, edges of three or more faces, inconsistent "
                              "orientation)")
     parser.add_argument("--no-cache", action="store_true", help="do not read or write the per-shape cache ($DARCYAN_CACHE)")
-    parser.add_argument("--threads", type=int, default=1, metavar="N",
-                        help="BLAS/OpenMP threads (default %(default)s: the work is not BLAS-bound, and more threads "
-                             "oversubscribe a busy machine; 0: the libraries' own default)")
+    parser.add_argument("--threads", type=int, default=None, metavar="N",
+                        help="BLAS/OpenMP threads (default $DARCYAN_THREADS, else 1: the work is not BLAS-bound, and "
+                             "more threads oversubscribe a busy machine; 0: the libraries' own default)")
 
 
 def _config(args: argparse.Namespace) -> DarcyanConfig:
@@ -571,23 +571,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _thread_limit(threads: int):
-    """A context limiting BLAS/OpenMP thread pools to ``threads`` (0: leave them as they are)."""
-    import contextlib
+def _thread_limit(threads: int | None):
+    """The library's thread policy (:mod:`darcyan.parallel`) set to ``--threads`` (when given), and
+    applied to the whole command (its own work between the library's calls included)."""
+    from .parallel import limited_threads, set_threads
 
-    if threads < 0:
+    if threads is not None and threads < 0:
         raise DarcyanError(f"--threads must be 0 (the libraries' default) or more, got {threads}")
-    if threads == 0:
-        return contextlib.nullcontext()
-    import os
-
-    from threadpoolctl import threadpool_limits
-
-    from .parallel import THREAD_VARIABLES
-
-    for name in THREAD_VARIABLES:  # for the libraries loaded later (scipy's OpenBLAS, OpenMP)
-        os.environ[name] = str(threads)
-    return threadpool_limits(threads)  # for those loaded already (numpy's OpenBLAS)
+    set_threads(threads)
+    return limited_threads()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -601,7 +593,7 @@ def main(argv: list[str] | None = None) -> int:
     warnings.simplefilter("ignore")  # library noise (numpy, trimesh) is not the user's business
     warnings.simplefilter("always", MeshWarning)
     try:
-        with _thread_limit(getattr(args, "threads", 0)):
+        with _thread_limit(getattr(args, "threads", None)):
             return args.func(args)
     except DarcyanError as exc:
         print(f"darcyan: error: {exc}", file=sys.stderr)

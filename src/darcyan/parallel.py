@@ -1,8 +1,27 @@
-"""Work in several processes, one way for the whole package (describing shapes, the benchmark)."""
+"""Work in several processes, and the threads of the libraries darcyan loads: one way for the
+whole package (describing shapes, dense maps, the benchmark), the library's and the command's alike.
+
+darcyan's own work does not gain from more BLAS/OpenMP threads (small products, sparse solves,
+nearest neighbours), and the libraries' own thread pools oversubscribe a machine whose cores are
+busy: a dense map of a 28k pair took 52 s through the library with the default pools beside a busy
+neighbour, 4.5 s with one thread. So the library's entry points (:func:`owns_threads`) run with
+:func:`get_threads` threads, 1 by default; :func:`set_threads` (``darcyan.set_threads``), the
+environment variable ``DARCYAN_THREADS`` or ``darcyan --threads N`` change it, 0 leaves the
+libraries' own pools as they are.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import os
+import threading
+
+from .errors import DarcyanError
+
+DEFAULT_THREADS = 1
+_threads = {"count": None}  # set_threads's value; None: DARCYAN_THREADS, else DEFAULT_THREADS
+_inside = threading.local()  # an entry point called from another keeps the outer limit
 
 # Set to 1 in every worker: libraries that start a thread pool later read them.
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
@@ -38,3 +57,60 @@ def _one_thread() -> None:
     for name in THREAD_VARIABLES:
         os.environ[name] = "1"
     threadpool_limits(1)
+
+
+def get_threads() -> int:
+    """The BLAS/OpenMP threads darcyan's entry points run with (0: the libraries' own)."""
+    if _threads["count"] is not None:
+        return _threads["count"]
+    value = os.environ.get("DARCYAN_THREADS", "")
+    try:
+        return int(value) if value.strip() else DEFAULT_THREADS
+    except ValueError:
+        raise DarcyanError(f"DARCYAN_THREADS must be a number of threads, got {value!r}") from None
+
+
+def set_threads(count: int | None) -> None:
+    """Run darcyan's work with ``count`` BLAS/OpenMP threads (0: the libraries' own pools;
+    ``None``: back to ``DARCYAN_THREADS`` or the default, 1)."""
+    if count is not None and (not isinstance(count, int) or isinstance(count, bool) or count < 0):
+        raise DarcyanError(f"threads must be 0 (the libraries' default) or more, got {count!r}")
+    _threads["count"] = count
+
+
+@contextlib.contextmanager
+def limited_threads(count: int | None = None):
+    """A context in which the thread pools loaded (and, through the environment, those loaded
+    later) run ``count`` threads (default :func:`get_threads`; 0: as they are). Nested, the outer
+    limit holds."""
+    count = get_threads() if count is None else count
+    if count == 0 or getattr(_inside, "active", False):
+        yield
+        return
+    from threadpoolctl import threadpool_limits
+
+    saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+    for name in THREAD_VARIABLES:  # for the libraries loaded later (scipy's OpenBLAS, OpenMP)
+        os.environ[name] = str(count)
+    _inside.active = True
+    try:
+        with threadpool_limits(count):  # for those loaded already (numpy's OpenBLAS)
+            yield
+    finally:
+        _inside.active = False
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+def owns_threads(function):
+    """Run ``function`` inside :func:`limited_threads`: an entry point of the library."""
+
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        with limited_threads():
+            return function(*args, **kwargs)
+
+    return wrapper

@@ -32,6 +32,7 @@ import numpy as np
 from ..errors import DarcyanError
 from ..geometry.knn import nearest_rows
 from ..geometry.mesh import Mesh
+from ..parallel import owns_threads
 from .alignment import aligned_map
 from .config import DenseConfig
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
@@ -70,6 +71,7 @@ class DenseMap:
     check: dict = field(default_factory=dict)
 
 
+@owns_threads
 def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig(),
               progress=None) -> DenseMap:
     """A target vertex for every source vertex, seeded by sparse ``correspondence``.

@@ -20,12 +20,14 @@ import numpy as np
 
 from ..errors import DarcyanError
 from ..geometry.knn import nearest_rows
+from ..parallel import owns_threads
 from .config import DenseConfig
 from .landmarks import MIN_LANDMARKS, landmark_set
 from .signatures import point_signature, signature_score
 from .zoomout import dense_basis, map_embeddings, seed_subset, zoomout, zoomout_samples
 
 
+@owns_threads
 def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig(),
                      full_basis: bool = False):
     """The matching a dense map would be seeded by: ``correspondence`` itself, or the alternative

@@ -21,10 +21,12 @@ import numpy as np
 
 from ..config import DarcyanConfig
 from ..io.cache import ShapeCache, code_digest, file_digest
+from ..parallel import owns_threads
 from .config import DenseConfig
 from .seeds import matching_of_seed, seed_check, verified_matches
 
 
+@owns_threads
 def verified_file_matches(source: str | os.PathLike, target: str | os.PathLike, correspondence,
                           shapes: Callable[[], tuple], config: DarcyanConfig = DarcyanConfig(),
                           dense_config: DenseConfig = DenseConfig(), repair: bool = False,

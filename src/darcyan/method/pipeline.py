@@ -26,7 +26,7 @@ from ..geometry.mesh import Mesh, MeshWarning
 from ..geometry.shape import Shape, prepare_shape
 from ..io.cache import ShapeCache, code_digest, file_digest
 from ..io.mesh_files import load_mesh
-from ..parallel import process_map
+from ..parallel import owns_threads, process_map
 from .descriptors import angular_profiles, curvature_descriptors
 from .features import (
     AGD,
@@ -172,6 +172,7 @@ class Correspondence:
         return "\n".join(lines) + "\n"
 
 
+@owns_threads
 def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
                  progress=None) -> ShapeAnalysis:
     """Prepare ``mesh`` (:func:`~darcyan.geometry.shape.prepare_shape`) and :func:`analyze_shape` it."""
@@ -182,6 +183,7 @@ def analyze_mesh(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: bo
     return analyze_shape(shape, config, progress, {"prepare": time.perf_counter() - start})
 
 
+@owns_threads
 def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progress=None,
                   timings: dict | None = None) -> ShapeAnalysis:
     """Describe a prepared shape (see the module docstring); keeps every intermediate result."""
@@ -289,6 +291,7 @@ def feature_geodesics(vertices: np.ndarray, distances: dict) -> np.ndarray:
     return 0.5 * (geodesics + geodesics.T)  # fast marching is not exactly symmetric
 
 
+@owns_threads
 def load_shape(path: str | os.PathLike, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
                warn: bool = True) -> Shape:
     """The :class:`~darcyan.geometry.shape.Shape` of a mesh file, prepared exactly as
@@ -300,6 +303,7 @@ def load_shape(path: str | os.PathLike, config: DarcyanConfig = DarcyanConfig(),
         return prepare_shape(load_mesh(path), config, repair)
 
 
+@owns_threads
 def describe_shape(source: str | os.PathLike | Mesh, config: DarcyanConfig = DarcyanConfig(),
                    repair: bool = False, cache: ShapeCache | None = None, progress=None) -> ShapeDescription:
     """The :class:`ShapeDescription` of a mesh file (or :class:`Mesh`); with ``cache``, reuse
@@ -321,6 +325,7 @@ def describe_shape(source: str | os.PathLike | Mesh, config: DarcyanConfig = Dar
     return description
 
 
+@owns_threads
 def describe_shapes(sources: list, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
                     cache: ShapeCache | None = None, jobs: int = 1) -> list:
     """:func:`describe_shape` each file of ``sources``; with ``jobs > 1``, the files not found in
@@ -389,6 +394,7 @@ _CACHED_KEYS = {"feature_vertices", "feature_agd", "descriptors", "feature_geode
                 "surface_profiles"}
 
 
+@owns_threads
 def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
                  config: DarcyanConfig = DarcyanConfig()) -> Correspondence:
     """Match the feature points of ``shape_1`` to those of ``shape_2`` by descriptor distance."""
@@ -415,6 +421,7 @@ def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
     return correspondence(matches, [correspondence(m) for m in alternatives], margin)
 
 
+@owns_threads
 def match_files(source, target, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
                 cache: ShapeCache | None = None, jobs: int = 1) -> Correspondence:
     """:func:`describe_shapes` both files (in ``jobs`` processes) and :func:`match_shapes` them."""

@@ -1,0 +1,66 @@
+"""The library's own thread policy (darcyan.parallel): its entry points run BLAS with one thread
+by default, whatever the caller's pools, as the command does."""
+
+import numpy as np
+import pytest
+from threadpoolctl import threadpool_info, threadpool_limits
+
+import darcyan
+from darcyan.dense.maps import dense_map
+from darcyan.dense.seeds import verified_matches
+from darcyan.errors import DarcyanError
+from darcyan.parallel import limited_threads, owns_threads
+
+
+def blas_threads() -> set:
+    return {pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"}
+
+
+@owns_threads
+def seen_inside() -> set:
+    np.ones((64, 64)) @ np.ones((64, 64))  # BLAS is loaded and used
+    return blas_threads()
+
+
+@pytest.fixture(autouse=True)
+def default_policy():
+    darcyan.set_threads(None)
+    yield
+    darcyan.set_threads(None)
+
+
+def test_entry_points_run_one_blas_thread_whatever_the_callers_pools(monkeypatch):
+    monkeypatch.delenv("DARCYAN_THREADS", raising=False)
+    if not blas_threads():
+        pytest.skip("no BLAS thread pool to inspect")
+    with threadpool_limits(2):
+        assert seen_inside() == {1}
+        darcyan.set_threads(0)  # the libraries' own pools: the caller's limit stands
+        assert seen_inside() == blas_threads()
+        darcyan.set_threads(3)
+        assert seen_inside() == {3}
+    monkeypatch.setenv("DARCYAN_THREADS", "2")
+    darcyan.set_threads(None)
+    assert darcyan.get_threads() == 2 and seen_inside() == {2}
+
+
+def test_an_inner_entry_point_keeps_the_outer_limit():
+    if not blas_threads():
+        pytest.skip("no BLAS thread pool to inspect")
+    with limited_threads(2):
+        assert seen_inside() == {2}  # the outer limit holds inside a nested entry point
+
+
+def test_the_public_entry_points_own_their_threads():
+    for function in (darcyan.describe_shape, darcyan.analyze_shape, darcyan.match_shapes, darcyan.load_shape,
+                     darcyan.match_files, dense_map, verified_matches):
+        assert hasattr(function, "__wrapped__"), function.__name__
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, True, "2"])
+def test_a_bad_thread_count_is_one_clear_error(bad, monkeypatch):
+    with pytest.raises(DarcyanError, match="threads must be"):
+        darcyan.set_threads(bad)
+    monkeypatch.setenv("DARCYAN_THREADS", "many")
+    with pytest.raises(DarcyanError, match="DARCYAN_THREADS"):
+        darcyan.get_threads()
