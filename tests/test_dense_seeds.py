@@ -172,3 +172,17 @@ def test_the_matching_of_a_seed_keeps_the_others_as_alternatives():
     assert chosen.source_vertex.tolist() == [1] and chosen.alternatives == (sparse, others[0], others[2])
     with pytest.raises(DarcyanError, match="seed 4: the matching has 3 alternatives"):
         matching_of_seed(sparse, 4)
+
+
+@pytest.mark.slow
+def test_a_map_that_sets_aside_a_sure_matching_is_not_trusted(figure_pair):
+    """The sparse matching (tips rolled by one: wrong) loses to its alternative (the right tips):
+    the map is right either way, but it is trusted only when the sparse stage was in doubt of its
+    matching: a sure matching set aside means two judgments disagree."""
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    wrong = dataclasses.replace(tip_correspondence(tips, np.roll(tips, 1)), alternatives=(tip_correspondence(tips, tips),))
+    for in_doubt in (True, False):
+        result = dense_map(shape_1, shape_2, dataclasses.replace(wrong, in_doubt=in_doubt), FAST_DENSE)
+        assert result.check["seed"] == 1 and result.check["orientation"] > 0.5
+        assert result.check["trusted"] is in_doubt

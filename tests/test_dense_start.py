@@ -63,3 +63,4 @@ def test_cli_dense_truth_prints_the_dense_score(small_pose_files, capsys, tmp_pa
     line = next(x for x in err.splitlines() if "vertices within" in x)
     within, total = (int(x) for x in line.split("dense map: ")[1].split(" vertices")[0].split(" of "))
     assert total > 0 and within / total >= DENSE_MIN_RATE and "mean error" in line
+    assert "dense map trusted" in err  # said of every map, trusted or not

@@ -215,9 +215,12 @@ def cmd_match(args: argparse.Namespace) -> int:
                 check = dense.check
                 say(f"dense map: {_seed_verdict(check)}; orientation agreement {check['orientation']:.2f} (1: kept, "
                     f"-1: mirrored), landmark distortion {check['distortion']:.3f} sqrt(area)")
-                if not check["trusted"]:
-                    print(f"darcyan: warning: {target}: the dense map is not trusted (another seed scored close, or its "
-                          f"orientation disagrees with its landmarks): look at it (--plot)", file=sys.stderr)
+                if check["trusted"]:
+                    print(f"darcyan: {target}: dense map trusted", file=sys.stderr)
+                else:
+                    print(f"darcyan: warning: {target}: dense map not trusted (its orientation disagrees with its "
+                          f"landmarks, or it set aside feature matches the sparse stage was sure of): look at it "
+                          f"(--plot)", file=sys.stderr)
             if args.truth:
                 from .eval.dense_scores import evaluate_dense
 
