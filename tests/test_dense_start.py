@@ -42,6 +42,7 @@ def test_too_few_landmarks_still_give_a_right_map(figure_pair, given):
     assert result.check["orientation"] > 0.5
 
 
+@pytest.mark.slow
 def test_the_spectral_start_rejects_the_mirrored_short_maps(figure_pair):
     """Of the 2^d sign choices, the chosen one keeps the orientation, and its landmarks are the
     source points' true images (shared numbering) to within a short map's accuracy."""
@@ -56,6 +57,7 @@ def test_the_spectral_start_rejects_the_mirrored_short_maps(figure_pair):
     assert np.median(errors) < 0.05
 
 
+@pytest.mark.slow
 def test_cli_dense_truth_prints_the_dense_score(small_pose_files, capsys, tmp_path):
     code = main(["match", *map(str, small_pose_files), "--dense", "--truth", "identity", "-o", str(tmp_path / "m.csv")])
     assert code == 0

@@ -14,8 +14,8 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "darcyan"
 
 # Lowest first. A module may import its own layer and the layers before it.
-LAYERS = ("errors", "_version", "config", "parallel", "geometry", "io", "method", "dense", "eval", "viz", "bench", "demo", "cli",
-          "__init__", "__main__")
+LAYERS = ("errors", "_version", "config", "parallel", "geometry", "io", "method", "dense", "eval", "correspond", "viz",
+          "bench", "demo", "cli", "__init__", "__main__")
 
 
 def layer_of(module: str) -> int:

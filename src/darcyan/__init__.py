@@ -13,6 +13,7 @@ L2 nearest-neighbour matching.
 
 from ._version import __version__  # noqa: F401 (darcyan.__version__)
 from .config import DarcyanConfig
+from .correspond import Correspondences, PairResult, correspond
 from .errors import ConfigError, DarcyanError, DependencyError, MeshError
 from .geometry.curvature import Curvatures, principal_curvatures
 from .geometry.geodesics import GeodesicSolver
@@ -39,11 +40,12 @@ from .method.pipeline import (
 from .parallel import get_threads, set_threads
 
 __all__ = [
-    "AGD", "ConfigError", "Correspondence", "Curvatures", "DarcyanConfig", "DarcyanError", "DarcyanGrid",
-    "DependencyError", "FeaturePoints", "GeodesicSolver", "Matches", "Mesh", "MeshError", "MeshWarning",
-    "Shape", "ShapeAnalysis", "ShapeCache", "ShapeDescription", "analyze_mesh", "analyze_shape",
-    "average_geodesic_distance", "curvature_descriptor",
+    "AGD", "ConfigError", "Correspondence", "Correspondences", "PairResult", "correspond", "Curvatures",
+    "DarcyanConfig", "DarcyanError", "DarcyanGrid", "DependencyError", "FeaturePoints", "GeodesicSolver",
+    "Matches", "Mesh", "MeshError", "MeshWarning", "Shape", "ShapeAnalysis", "ShapeCache", "ShapeDescription",
+    "analyze_mesh", "analyze_shape", "average_geodesic_distance", "curvature_descriptor",
     "curvature_descriptors", "darcyan_grid", "darcyan_grids", "describe_shape", "descriptor_distances",
-    "extremities", "load_mesh", "load_shape", "match_descriptors", "match_files", "match_shapes", "normalize_mesh",
-    "get_threads", "prepare_mesh", "prepare_shape", "principal_curvatures", "save_mesh", "set_threads",
+    "extremities", "load_mesh", "load_shape", "match_descriptors", "match_files", "match_shapes",
+    "normalize_mesh", "get_threads", "prepare_mesh", "prepare_shape", "principal_curvatures", "save_mesh",
+    "set_threads",
 ]

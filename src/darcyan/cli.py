@@ -126,7 +126,8 @@ def _note_changes(shape) -> None:
 
 
 def cmd_match(args: argparse.Namespace) -> int:
-    from .method.pipeline import describe_shapes, load_shape, match_shapes
+    from .correspond import correspond
+    from .method.pipeline import load_shape
 
     config = _config(args)
     if args.jobs < 1:
@@ -160,78 +161,31 @@ def cmd_match(args: argparse.Namespace) -> int:
         read_truth(args.truth)  # a malformed spec or file fails before any computation
     _picture_dependencies(args)
     say = _progress(args)
-    descriptions = describe_shapes([args.source, *targets], config, args.repair, cache, args.jobs)
-    say(f"described {len(descriptions)} shapes")  # after: a bad input stays one error line
-    for description in descriptions:
+    verify = True if args.verify else False if args.no_verify else "auto"
+    result = correspond(args.source, targets, dense=args.dense, config=config, dense_config=dense_config,
+                        cache=cache or False, verify=verify, repair=args.repair, jobs=args.jobs, progress=say)
+    for description in result.descriptions:
         _note_changes(description)
-    source_shape = None
-    results = []  # (target, correspondence, dense map or None)
-    for target, description in zip(targets, descriptions[1:]):
-        correspondence = match_shapes(descriptions[0], description, config)
-        score = dense = None
-        prepared: list = []  # both shapes, prepared once for everything below that needs them
-
-        def shapes_of(target=target, prepared=prepared):
-            nonlocal source_shape
-            if not prepared:
-                if source_shape is None:
-                    source_shape = load_shape(args.source, config, args.repair, warn=False)
-                prepared.extend([source_shape, load_shape(target, config, args.repair, warn=False)])
-            return prepared
-
-        # A matching in doubt is verified, unless --no-verify or a dense map makes the same choice.
-        verify = args.verify or (correspondence.in_doubt and not args.no_verify and not args.dense)
-        if verify:
-            from .dense.config import DenseConfig
-            from .dense.maps import DENSE_FAILURES
-            from .dense.verify import verified_file_matches
-
-            why = "" if args.verify else (f" (in doubt: the orientation test's margin {correspondence.margin:.2f} "
-                                          f"< {config.mirror.verify_below:g})")
-            say(f"verifying the matches{why}")
-            try:
-                # With --dense, scored on the dense map's basis, which the map then reuses.
-                correspondence, about = verified_file_matches(args.source, target, correspondence, shapes_of, config,
-                                                              dense_config or DenseConfig(), args.repair, cache,
-                                                              full_basis=bool(args.dense))
-                print(f"darcyan: {target}: verified{why}{' (cached)' if about['cached'] else ''}: "
-                      f"{_seed_verdict(about)}", file=sys.stderr)
-            except DENSE_FAILURES as exc:
-                print(f"darcyan: warning: {target}: the matches were not verified: {exc}", file=sys.stderr)
-        shapes = shapes_of() if args.dense or args.plot or args.html or args.truth else None
+    for pair in result:
+        target, correspondence, dense = pair.target, pair.matches, pair.dense
+        about = pair.verification
+        if about is not None and "failed" in about:
+            print(f"darcyan: warning: {target}: the matches were not verified: {about['failed']}", file=sys.stderr)
+        elif about is not None:
+            print(f"darcyan: {target}: verified{about['why']}{' (cached)' if about['cached'] else ''}: "
+                  f"{_seed_verdict(about)}", file=sys.stderr)
+        shapes = pair.shapes
+        if shapes is None and (args.plot or args.html or args.truth):
+            shapes = (load_shape(args.source, config, args.repair, warn=False),
+                      load_shape(target, config, args.repair, warn=False))
+        score = None
         if args.truth:
-            truth = read_truth(args.truth, descriptions[0].n_input_vertices, description.n_input_vertices)
+            truth = read_truth(args.truth, result.descriptions[0].n_input_vertices,
+                               result.descriptions[1].n_input_vertices)
             score = score_matches(shapes[0], shapes[1], correspondence, truth)
             print(f"darcyan: {score.summary()}", file=sys.stderr)
-        if args.dense:
-            from .dense.maps import DENSE_FAILURES, UNMAPPED, dense_map
-
-            try:
-                dense = dense_map(shapes[0], shapes[1], correspondence, dense_config,
-                                  progress=lambda stage: say(f"dense map: {stage}"))
-            except DENSE_FAILURES as exc:  # one line, never a traceback
-                raise DarcyanError(f"{args.source} -> {target}: no dense map: {exc}") from None
-            if dense.check:
-                check = dense.check
-                say(f"dense map: {_seed_verdict(check)}; orientation agreement {check['orientation']:.2f} (1: kept, "
-                    f"-1: mirrored), landmark distortion {check['distortion']:.3f} sqrt(area)")
-                if check["trusted"]:
-                    print(f"darcyan: {target}: dense map trusted", file=sys.stderr)
-                else:
-                    print(f"darcyan: warning: {target}: dense map not trusted (its orientation disagrees with its "
-                          f"landmarks, or it set aside feature matches the sparse stage was sure of): look at it "
-                          f"(--plot)", file=sys.stderr)
-            if args.truth:
-                from .eval.dense_scores import evaluate_dense
-
-                scored = evaluate_dense(shapes[0].mesh, shapes[1].mesh, dense.target, truth,
-                                        target_solver=shapes[1].solver)
-                print(f"darcyan: dense map: {int((scored.errors <= scored.threshold).sum())} of {len(scored.errors)} "
-                      f"vertices within {scored.threshold:g} sqrt(area), mean error {scored.mean:.4f}", file=sys.stderr)
-            left_out = int((dense.target == UNMAPPED).sum())
-            if left_out:
-                print(f"darcyan: warning: {args.source}: {left_out} vertices outside the matched component "
-                      f"are written with target_vertex {UNMAPPED}", file=sys.stderr)
+        if dense is not None:
+            _say_dense(say, target, args.source, dense, shapes, truth if args.truth else None)
         if (args.plot or args.html) and args.dense:  # the dense map: texture transfer, errors with --truth
             from .viz.scenes import dense_scene
 
@@ -242,18 +196,38 @@ def cmd_match(args: argparse.Namespace) -> int:
 
             scene = match_scene(shapes[0], shapes[1], correspondence, config=config, score=score)
             _pictures(scene, args.plot, args.html, "render_matches", "matches_html")
-        results.append((target, correspondence, dense))
     if args.dense and several:
-        folder = Path(args.output)
-        for target, _, dense in results:
-            name = folder / f"{Path(target).stem}.{form}"
-            _write_text(_dense_text(args.source, target, dense.target, form), str(name))
-        say(f"{len(results)} dense maps written to {folder}")
-    elif args.dense:
-        _write_text(_dense_text(args.source, targets[0], results[0][2].target, form), args.output)
+        result.to_json(args.output) if form == "json" else result.to_csv(args.output)
+        say(f"{len(result)} dense maps written to {args.output}")
     else:
-        _write_text(_matches_text(args.source, [(t, c) for t, c, _ in results], form, several), args.output)
+        _write_text(result.text(form), args.output)
     return 0
+
+
+def _say_dense(say, target: str, source: str, dense, shapes, truth) -> None:
+    """What ``darcyan match --dense`` says of a map: how it was started and checked, whether it is
+    trusted, its score against ``truth`` (when given) and the vertices it left unmapped."""
+    from .dense.maps import UNMAPPED
+
+    check = dense.check
+    say(f"dense map: {_seed_verdict(check)}; orientation agreement {check['orientation']:.2f} (1: kept, "
+        f"-1: mirrored), landmark distortion {check['distortion']:.3f} sqrt(area)")
+    if check["trusted"]:
+        print(f"darcyan: {target}: dense map trusted", file=sys.stderr)
+    else:
+        print(f"darcyan: warning: {target}: dense map not trusted (its orientation disagrees with its "
+              f"landmarks, or it set aside feature matches the sparse stage was sure of): look at it "
+              f"(--plot)", file=sys.stderr)
+    if truth is not None:
+        from .eval.dense_scores import evaluate_dense
+
+        scored = evaluate_dense(shapes[0].mesh, shapes[1].mesh, dense.target, truth, target_solver=shapes[1].solver)
+        print(f"darcyan: dense map: {int((scored.errors <= scored.threshold).sum())} of {len(scored.errors)} "
+              f"vertices within {scored.threshold:g} sqrt(area), mean error {scored.mean:.4f}", file=sys.stderr)
+    left_out = int((dense.target == UNMAPPED).sum())
+    if left_out:
+        print(f"darcyan: warning: {source}: {left_out} vertices outside the matched component "
+              f"are written with target_vertex {UNMAPPED}", file=sys.stderr)
 
 
 def _dense_folder(output: str | None, targets: list) -> None:
@@ -295,36 +269,6 @@ def _output_format(args: argparse.Namespace) -> str:
     if args.format:
         return args.format
     return "json" if args.output and Path(args.output).suffix.lower() == ".json" else "csv"
-
-
-def _matches_text(source: str, pairs: list, form: str, several: bool) -> str:
-    """The matches of ``source`` with each ``(target, Correspondence)``: CSV (a leading
-    ``target`` column with several targets) or JSON (one object per target)."""
-    if form == "json":
-        import json
-
-        records = [{"source": str(source), "target": str(target),
-                    "matches": [{"source_vertex": int(s), "target_vertex": int(t), "distance": float(d)}
-                                for s, t, d in zip(c.source_vertex, c.target_vertex, c.distance)]}
-                   for target, c in pairs]
-        return json.dumps(records if several else records[0], indent=1) + "\n"
-    if not several:
-        return pairs[0][1].to_csv()
-    lines = ["target,source_vertex,target_vertex,distance"]
-    for target, c in pairs:
-        lines += [f"{target},{s},{t},{d:.6g}" for s, t, d in zip(c.source_vertex, c.target_vertex, c.distance)]
-    return "\n".join(lines) + "\n"
-
-
-def _dense_text(source: str, target: str, map_12, form: str) -> str:
-    from .dense.maps import dense_map_to_csv
-
-    if form == "json":
-        import json
-
-        return json.dumps({"source": str(source), "target": str(target),
-                           "target_vertex": [int(v) for v in map_12]}) + "\n"
-    return dense_map_to_csv(map_12)
 
 
 def _seed_verdict(about: dict) -> str:

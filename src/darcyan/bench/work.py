@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import DarcyanConfig
+from ..correspond import verification_wanted
 from ..dense import pyfm
 from ..errors import DarcyanError
 from ..eval.metrics import (
@@ -261,7 +262,7 @@ def _sparse_records(job: dict, target: Shape) -> list:
             correspondence = match_shapes(replace(src["description"], descriptors=src["descriptors"][method]),
                                           replace(tgt["description"], descriptors=tgt["descriptors"][method]), config)
             unverified = correspondence
-            if method == "darcyan" and correspondence.in_doubt:  # as `darcyan match` does
+            if method == "darcyan" and verification_wanted(correspondence, "auto", dense=False):  # the command's rule
                 correspondence, verified = _verified(job, target, correspondence)
             m = correspondence.matches_12
             rows, matched, distance = m.source, target_features[m.target], m.distance

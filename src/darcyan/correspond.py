@@ -1,0 +1,285 @@
+"""The front door: :func:`correspond` does from Python what ``darcyan match`` does.
+
+It describes the shapes (with the on-disk cache, several at once), matches the source with each
+target, verifies a matching the sparse stage is in doubt of (:mod:`darcyan.dense.verify`) and, when
+asked, makes the dense map; :class:`Correspondences` holds what came out and writes it exactly as
+``darcyan match ... -o`` does (the command is a shell over this module).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from .config import DarcyanConfig
+from .dense.config import DenseConfig
+from .dense.maps import DENSE_FAILURES, DenseMap, dense_map, dense_map_to_csv
+from .errors import DarcyanError
+from .geometry.mesh import Mesh
+from .geometry.shape import Shape, prepare_shape
+from .io.cache import ShapeCache
+from .method.pipeline import Correspondence, analyze_shape, describe_shape, describe_shapes, load_shape, match_shapes
+from .parallel import owns_threads
+
+VERIFY_CHOICES = ("auto", True, False)
+
+
+@dataclass(frozen=True)
+class PairResult:
+    """What :func:`correspond` found for one target.
+
+    Attributes:
+        target: the target's name (its path, or the name of a mesh given in memory).
+        matches: the feature matches (:class:`~darcyan.method.pipeline.Correspondence`, input
+            numbering), verified when that was asked or the matching was in doubt.
+        dense: the dense map (:class:`~darcyan.dense.maps.DenseMap`) with ``dense=True``, else ``None``.
+        verification: what the verification said (``seed``, ``signatures``, ``clear``,
+            ``cached``; ``why``: why it was made; ``failed``: why it could not be made), or
+            ``None`` when none was made.
+        shapes: the prepared source and target (:class:`~darcyan.geometry.shape.Shape`) when
+            verifying or the dense map needed them, else ``None``.
+    """
+
+    target: str
+    matches: Correspondence
+    dense: DenseMap | None = None
+    verification: dict | None = None
+    shapes: tuple | None = None
+
+
+@dataclass(frozen=True)
+class Correspondences:
+    """The result of :func:`correspond`: the source's name, its description and the targets'
+    (``descriptions``: their notes of repairs are in ``.changes``), and one :class:`PairResult`
+    per target, in order (``result[0]``, ``len(result)``, ``for pair in result``)."""
+
+    source: str
+    pairs: tuple
+    descriptions: tuple
+    dense: bool = False
+
+    def __len__(self) -> int:
+        return len(self.pairs)
+
+    def __getitem__(self, index: int) -> PairResult:
+        return self.pairs[index]
+
+    def __iter__(self):
+        return iter(self.pairs)
+
+    def text(self, form: str = "csv") -> str:
+        """What ``darcyan match`` writes for one target (``form``: ``"csv"`` or ``"json"``): the
+        feature matches, or the dense map with ``dense=True``; for several targets the matches
+        with a leading ``target`` column (CSV) or one object per target (JSON). Several dense
+        maps are one text per target: :meth:`dense_text`."""
+        if form not in ("csv", "json"):
+            raise DarcyanError(f"output format must be 'csv' or 'json', got {form!r}")
+        if self.dense:
+            if len(self.pairs) > 1:
+                raise DarcyanError("several dense maps are written one file per target (to_csv(folder))")
+            return self.dense_text(0, form)
+        return matches_text(self.source, [(p.target, p.matches) for p in self.pairs], form, len(self.pairs) > 1)
+
+    def dense_text(self, index: int, form: str = "csv") -> str:
+        """The dense map of target ``index`` as ``darcyan match --dense`` writes it."""
+        pair = self.pairs[index]
+        if pair.dense is None:
+            raise DarcyanError(f"{self.source} -> {pair.target}: no dense map was asked for (dense=True)")
+        return dense_text(self.source, pair.target, pair.dense.target, form)
+
+    def to_csv(self, path: str | os.PathLike | None = None) -> str:
+        """Write CSV to ``path`` (a file; with several dense maps, a folder: ``<target name>.csv``
+        in it), the same bytes as ``darcyan match ... -o path``; returns the text (of the first
+        map with several)."""
+        return self._write(path, "csv")
+
+    def to_json(self, path: str | os.PathLike | None = None) -> str:
+        """:meth:`to_csv` in JSON (``darcyan match ... -o path.json``)."""
+        return self._write(path, "json")
+
+    def _write(self, path, form: str) -> str:
+        if self.dense and len(self.pairs) > 1:
+            texts = [self.dense_text(i, form) for i in range(len(self.pairs))]
+            if path is not None:
+                folder = Path(path)
+                _write_file(None, folder, mkdir=True)
+                for pair, text in zip(self.pairs, texts):
+                    _write_file(text, folder / f"{Path(pair.target).stem}.{form}")
+            return texts[0]
+        text = self.text(form)
+        if path is not None:
+            _write_file(text, Path(path))
+        return text
+
+
+def matches_text(source: str, pairs: list, form: str, several: bool) -> str:
+    """The matches of ``source`` with each ``(target, Correspondence)``: CSV (a leading
+    ``target`` column with several targets) or JSON (one object per target)."""
+    if form == "json":
+        records = [{"source": str(source), "target": str(target),
+                    "matches": [{"source_vertex": int(s), "target_vertex": int(t), "distance": float(d)}
+                                for s, t, d in zip(c.source_vertex, c.target_vertex, c.distance)]}
+                   for target, c in pairs]
+        return json.dumps(records if several else records[0], indent=1) + "\n"
+    if not several:
+        return pairs[0][1].to_csv()
+    lines = ["target,source_vertex,target_vertex,distance"]
+    for target, c in pairs:
+        lines += [f"{target},{s},{t},{d:.6g}" for s, t, d in zip(c.source_vertex, c.target_vertex, c.distance)]
+    return "\n".join(lines) + "\n"
+
+
+def dense_text(source: str, target: str, map_12, form: str) -> str:
+    """A dense map as CSV (``source_vertex,target_vertex``) or JSON (``{"source", "target", "target_vertex"}``)."""
+    if form == "json":
+        return json.dumps({"source": str(source), "target": str(target),
+                           "target_vertex": [int(v) for v in map_12]}) + "\n"
+    return dense_map_to_csv(map_12)
+
+
+def verification_wanted(correspondence, verify, dense: bool) -> bool:
+    """Whether a matching is verified: always with ``verify=True``, never with ``False``; with
+    ``"auto"``, when the sparse stage is in doubt of it and no dense map follows (a dense map
+    weighs the same alternatives on its full basis)."""
+    if verify not in VERIFY_CHOICES:
+        raise DarcyanError(f"verify must be 'auto', True or False, got {verify!r}")
+    return verify is True or (verify == "auto" and bool(correspondence.in_doubt) and not dense)
+
+
+@owns_threads
+def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | None = None,
+               dense_config: DenseConfig | None = None, cache: bool | ShapeCache = True, verify="auto",
+               repair: bool = False, jobs: int = 2, progress=None) -> Correspondences:
+    """Match ``source`` with each of ``targets`` as ``darcyan match`` does.
+
+    Args:
+        source: a mesh file's path, a :class:`~darcyan.geometry.mesh.Mesh`, a prepared
+            :class:`~darcyan.geometry.shape.Shape` or a ``trimesh.Trimesh``.
+        targets: one target of those kinds, or a list of them.
+        dense: also make each pair's dense map (``darcyan match --dense``).
+        config: the method's settings (default :class:`~darcyan.config.DarcyanConfig`).
+        dense_config: the dense map's settings (default :class:`~darcyan.dense.config.DenseConfig`).
+        cache: keep and reuse shape descriptions and verifications on disk (``True``: the
+            default cache, ``$DARCYAN_CACHE``; a :class:`~darcyan.io.cache.ShapeCache`; ``False``:
+            none). Files only: shapes given in memory are described anew.
+        verify: ``"auto"`` verifies a matching the sparse stage is in doubt of (without
+            ``dense``); ``True`` every matching (``--verify``); ``False`` none (``--no-verify``).
+        repair: weld coincident boundary vertices (``--repair``); the ordinary repairs are made
+            anyway, unless ``config.repairing.strict``.
+        jobs: shapes described at once, in worker processes (files not yet cached).
+        progress: called with a line of text at each stage (``darcyan match`` prints them).
+
+    Returns:
+        a :class:`Correspondences`; ``.to_csv(path)`` writes what ``darcyan match ... -o path``
+        writes.
+
+    Raises:
+        DarcyanError: for bad input (a :class:`~darcyan.errors.MeshError` names the file), and
+            for a pair that gets no dense map.
+    """
+    config = DarcyanConfig() if config is None else config
+    dense_config = DenseConfig() if dense_config is None else dense_config
+    if isinstance(targets, (list, tuple)):
+        targets = list(targets)
+    else:
+        targets = [targets]
+    if not targets:
+        raise DarcyanError("correspond: no target given")
+    if not isinstance(jobs, int) or jobs < 1:
+        raise DarcyanError(f"jobs must be at least 1, got {jobs!r}")
+    if verify not in VERIFY_CHOICES:
+        raise DarcyanError(f"verify must be 'auto', True or False, got {verify!r}")
+    say = progress or (lambda text: None)
+    store = ShapeCache() if cache is True else (cache or None)
+    inputs = [_input(item) for item in [source, *targets]]
+    descriptions = _describe(inputs, config, repair, store, jobs)
+    say(f"described {len(descriptions)} shapes")
+    names = [_name(item) for item in inputs]
+    prepared: dict = {}
+
+    def shape_of(index: int) -> Shape:
+        if index not in prepared:
+            item = inputs[index]
+            if isinstance(item, Shape):
+                prepared[index] = item
+            elif isinstance(item, Mesh):
+                prepared[index] = prepare_shape(item, config, repair)
+            else:
+                prepared[index] = load_shape(item, config, repair, warn=False)
+        return prepared[index]
+
+    pairs = []
+    for index, (target, description) in enumerate(zip(names[1:], descriptions[1:]), start=1):
+        matches = match_shapes(descriptions[0], description, config)
+        verification = None
+        if verification_wanted(matches, verify, dense):
+            why = "" if verify is True else (f" (in doubt: the orientation test's margin {matches.margin:.2f} "
+                                             f"< {config.mirror.verify_below:g})")
+            say(f"verifying the matches{why}")
+            try:
+                matches, verification = _verified(inputs[0], inputs[index], matches, lambda i=index: (shape_of(0),
+                                                  shape_of(i)), config, dense_config, repair, store, dense)
+            except DENSE_FAILURES as exc:
+                verification = {"failed": str(exc)}
+            verification["why"] = why
+        made = None
+        if dense:
+            try:
+                made = dense_map(shape_of(0), shape_of(index), matches, dense_config,
+                                 progress=lambda stage: say(f"dense map: {stage}"))
+            except DENSE_FAILURES as exc:  # one line, never a traceback
+                raise DarcyanError(f"{names[0]} -> {target}: no dense map: {exc}") from None
+        shapes = (shape_of(0), shape_of(index)) if index in prepared else None
+        pairs.append(PairResult(target, matches, made, verification, shapes))
+    return Correspondences(names[0], tuple(pairs), tuple(descriptions), dense)
+
+
+def _input(item):
+    """A path, a :class:`Mesh` or a :class:`Shape` as they are; a ``trimesh.Trimesh`` as a Mesh."""
+    if isinstance(item, (str, os.PathLike, Mesh, Shape)):
+        return item
+    if type(item).__name__ == "Trimesh" and hasattr(item, "vertices") and hasattr(item, "faces"):
+        name = str(getattr(item, "metadata", {}).get("file_name") or "trimesh")
+        return Mesh(item.vertices, item.faces, name)
+    raise DarcyanError(f"correspond: cannot read {type(item).__name__!r}: give a path, a darcyan Mesh or Shape, "
+                       f"or a trimesh.Trimesh")
+
+
+def _name(item) -> str:
+    return str(item) if isinstance(item, (str, os.PathLike)) else item.name
+
+
+def _describe(inputs: list, config: DarcyanConfig, repair: bool, store, jobs: int) -> list:
+    """The descriptions of ``inputs``: the files together (cache, workers), the others one by one."""
+    files = [i for i, item in enumerate(inputs) if isinstance(item, (str, os.PathLike))]
+    described = dict(zip(files, describe_shapes([inputs[i] for i in files], config, repair, store, jobs)))
+    for i, item in enumerate(inputs):
+        if i not in described:
+            described[i] = analyze_shape(item, config).description if isinstance(item, Shape) else \
+                describe_shape(item, config, repair)
+    return [described[i] for i in range(len(inputs))]
+
+
+def _verified(source, target, matches, shapes, config, dense_config, repair, store, dense: bool) -> tuple:
+    """``verified_file_matches`` (kept in the cache) for two files, ``verified_matches`` otherwise."""
+    from .dense.seeds import verified_matches
+    from .dense.verify import verified_file_matches
+
+    if isinstance(source, (str, os.PathLike)) and isinstance(target, (str, os.PathLike)):
+        # With a dense map to follow, scored on its basis, which the map then reuses.
+        return verified_file_matches(source, target, matches, shapes, config, dense_config, repair, store,
+                                     full_basis=dense)
+    checked, about = verified_matches(*shapes(), matches, dense_config, full_basis=dense)
+    return checked, {**about, "cached": False}
+
+
+def _write_file(text: str | None, path: Path, mkdir: bool = False) -> None:
+    try:
+        if mkdir:
+            path.mkdir(parents=True, exist_ok=True)
+        else:
+            path.write_text(text)
+    except OSError as exc:
+        raise DarcyanError(f"{path}: cannot write ({exc.strerror or exc})") from None
