@@ -1,5 +1,5 @@
 """The settings of a dense map: :class:`DenseConfig`, every number that changes one, typed and
-documented in one place (``docs/decisions/`` shows how each default was chosen)."""
+documented in one place (``docs/decisions/dense.md`` shows how each default was chosen)."""
 
 from __future__ import annotations
 
@@ -40,10 +40,10 @@ class DenseConfig:
             the k first of the other (a rectangular map), in the steps and in the final map.
             Between two bodies that are not isometric the eigenfunctions do not pair up index
             by index: near the cut at k, one shape's k-th is a mix of the other's on either side
-            of it, which a square map must drop (``docs/decisions/``). The short ZoomOuts that
+            of it, which a square map must drop (``docs/decisions/dense.md``). The short ZoomOuts that
             score the seeds keep square maps.
         margin_from: the smallest size of ZoomOut that gets the margin (from the first size on,
-            three FAUST maps of 40 lost 2-6 points).
+            some FAUST maps lost: ``docs/decisions/dense.md``).
         zoomout_samples: ZoomOut iterates on this many surface samples of each shape (0 = on
             all vertices); the final map is always computed for every source vertex.
         ensemble: ZoomOut runs from this many different samples (the first as ``sampling``
@@ -53,19 +53,19 @@ class DenseConfig:
         bijectivity, orthogonality: scales of the bijectivity (the map b -> a undoes a -> b)
             and orthogonality (area preservation) terms beside the coupling term in ZoomOut's
             nearest-neighbour searches: each term's coordinates are multiplied by its scale, so
-            its squared residual weighs the square (bijectivity 2: 4; ``docs/decisions/``).
+            its squared residual weighs the square (bijectivity 2: 4; ``docs/decisions/dense.md``).
             0 and 0 = plain ZoomOut.
         landmark_weight: weight of the landmark coordinates (geodesic distances to the landmarks
             and, with ``orientation_weight``, their turns) beside the spectral terms in every
             ZoomOut step and in the final map: the landmarks hold the map throughout, not only
-            at its start (3: ``docs/decisions/``).
+            at its start (3: ``docs/decisions/dense.md``).
         orientation_weight: weight of the :func:`~darcyan.dense.landmarks.orientation_coordinates` beside the geodesic
             distances to the landmarks in the first map and in the landmark term (0: distances
-            only). Distances to five extremities of a human cannot tell its front from its back:
-            on FAUST, maps without them were flipped over a third of the body in 12 of 40 pairs.
+            only). Distances to five extremities of a human cannot tell its front from its back;
+            the turns can (``docs/decisions/dense.md``).
         basis_tolerance: relative accuracy of the eigenvalues asked of the eigensolver (its
-            start vector is seeded); at 1e-3 the eigenvectors of FAUST shapes equal those at
-            machine precision to 1e-14, in half the time.
+            start vector is seeded): 1e-3 gives the vectors of machine precision in half the
+            time (``docs/decisions/dense.md``).
         basis_proxy_vertices: the basis of a mesh with more than twice this many vertices is
             computed on a decimated copy of about this many and interpolated
             (:meth:`darcyan.geometry.shape.Shape.smooth_basis`); 0: always on the mesh itself.
@@ -75,10 +75,8 @@ class DenseConfig:
             matching alone). A seed of mirrored landmarks otherwise ruins a whole map.
         seed_statistic: how a seed's score sums the signature differences between the short map's
             source points and their images: ``"median"`` of the points' differences, or their
-            ``"mean"``. Parts glued where they touch, and a surface rebuilt by marching cubes,
-            change the curvature over a few regions; the mean let those regions decide, and right
-            sure matchings of glued FAUST copies lost to wrong alternatives (three wholly wrong maps
-            in 97 pairs), where the median keeps them (``docs/``).
+            ``"mean"``. Parts glued where they touch change the curvature over a few regions,
+            which the median does not let decide (``docs/decisions/every-pair.md``).
         seed_basis, seed_samples: size of the short ZoomOut that scores each seed, and the
             samples it runs on.
         signature_lengths: diffusion lengths (sqrt(area)) of the mean curvature in that signature.
@@ -88,14 +86,14 @@ class DenseConfig:
             the landmark coordinates cannot tell which way an arm or a chest is turned, and a
             map locks in a wrong turn there; the curvature of a face, a chest or an elbow can.
             At the fine sizes the signature (which changes with the pose) would bias the map,
-            so it is dropped (``docs/decisions/``).
+            so it is dropped (``docs/decisions/dense.md``).
         signature_until: the largest basis size whose ZoomOut step uses the signature.
         signature_turns: weight of the :func:`~darcyan.dense.signatures.signature_turn_coordinates` (at each vertex, the
             turn from the gradient of the distance to each landmark to the gradient of each
             length of the point signature) beside the other terms of every ZoomOut step of the
             chosen seed and of the final read-out (0: never). Along a limb the distances to all
             the landmarks grow alike on all its sides; the turn from that direction to the one in
-            which the curvature changes differs from one side to another (``docs/decisions/``).
+            which the curvature changes differs from one side to another (``docs/decisions/dense.md``).
         seed_margin: an alternative replaces the sparse matching only when its score is lower
             by at least this share (``DenseMap.check["clear"]``: no other seed scored within
             this share of the chosen one's).
@@ -116,21 +114,20 @@ class DenseConfig:
             eigenfunctions of unlike frequencies only where the point map insists. Between two
             bodies a point map's noise spreads over all the entries, and a plain fit carries it
             into the next step. 0: plain ZoomOut fits. The short ZoomOuts that score the seeds
-            fit without it (``docs/decisions/``).
+            fit without it (``docs/decisions/dense.md``).
         seed: seed of the random surface samples (``sampling`` ``"random"``, and the other
             members of an ensemble).
         sampling: how the ``zoomout_samples`` are chosen: ``"random"``, drawn by area with
             ``seed``; ``"farthest"``, farthest-point samples (spread evenly, and the same whatever
             the vertices' numbering: a renumbered or re-welded file gets the same map; the other
-            members of an ensemble still draw at random). Farthest points gained a little on
-            FAUST but lost one tosca-hires map (michael0 -> 10: 99.0% -> 88.8% within 0.05), so
-            random stays the default (``docs/decisions/``).
+            members of an ensemble still draw at random). Random stays the default: farthest
+            points lost a tosca-hires map (``docs/decisions/dense.md``).
         alignment_rounds: rounds of :func:`~darcyan.dense.alignment.aligned_map` after ZoomOut:
             the source deformed as rigidly as possible towards the map's images, then each
             vertex sent to the target vertex nearest its deformed position and normal (0: the
             map ZoomOut reads out). Intrinsic refinements drift towards the most isometric map,
             which between two bodies is not the true one; the shape of the source's one-rings
-            is information they do not use (``docs/decisions/``).
+            is information they do not use (``docs/decisions/dense.md``).
         alignment_length: the deformation follows the map on scales beyond this length (sqrt(area)
             units) and keeps the source's shape below it (the weight of its pull is
             ``2 / alignment_length^2`` per unit area, each edge counted twice in the rigidity term;
@@ -149,7 +146,7 @@ class DenseConfig:
         alignment_slack: a vertex keeps ZoomOut's image where the aligned image's geodesic
             distances to the landmarks differ from the vertex's own by more than this (sqrt(area)
             units) beyond those of ZoomOut's image: two fingers side by side are near in space,
-            not in their distances to the landmarks (``docs/decisions/``).
+            not in their distances to the landmarks (``docs/decisions/dense.md``).
     """
 
     method: str = "zoomout"

@@ -151,10 +151,8 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
 def trusted(check: dict, correspondence, config: DenseConfig) -> bool:
     """Whether a map's ``check`` lets it be trusted: its orientation agrees with its landmarks
     (at least ``config.trust_orientation``), and it did not set aside a matching the sparse stage
-    was sure of (not ``in_doubt``) for an alternative. Two judgments made independently, the
-    sparse stage's orientation test and the dense stage's curvature signature, then disagree:
-    on glued FAUST and TOSCA copies four of five wholly wrong maps were such overrides, while a
-    close runner-up seed (the former rule) marked 12 right maps and no wholly wrong one
+    was sure of (not ``in_doubt``) for an alternative: two judgments made independently, the
+    sparse stage's orientation test and the dense stage's curvature signature, then disagree
     (``docs/decisions/every-pair.md``)."""
     overrode = (check.get("start", "matches") == "matches" and check.get("seed", 0) != 0
                 and not getattr(correspondence, "in_doubt", True))
