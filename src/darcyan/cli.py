@@ -184,12 +184,13 @@ def cmd_match(args: argparse.Namespace) -> int:
                                result.descriptions[1].n_input_vertices)
             score = score_matches(shapes[0], shapes[1], correspondence, truth)
             print(f"darcyan: {score.summary()}", file=sys.stderr)
+        scored = None
         if dense is not None:
-            _say_dense(say, target, args.source, dense, shapes, truth if args.truth else None)
+            scored = _say_dense(say, target, args.source, dense, shapes, truth if args.truth else None)
         if (args.plot or args.html) and args.dense:  # the dense map: texture transfer, errors with --truth
             from .viz.scenes import dense_scene
 
-            scene = dense_scene(shapes[0], shapes[1], dense, truth if args.truth else None)
+            scene = dense_scene(shapes[0], shapes[1], dense, truth if args.truth else None, scored=scored)
             _pictures(scene, args.plot, args.html, "render_dense", "dense_html")
         elif args.plot or args.html:
             from .viz.scenes import match_scene
@@ -204,9 +205,11 @@ def cmd_match(args: argparse.Namespace) -> int:
     return 0
 
 
-def _say_dense(say, target: str, source: str, dense, shapes, truth) -> None:
+def _say_dense(say, target: str, source: str, dense, shapes, truth):
     """What ``darcyan match --dense`` says of a map: how it was started and checked, whether it is
-    trusted, its score against ``truth`` (when given) and the vertices it left unmapped."""
+    trusted, its score against ``truth`` (when given) and the vertices it left unmapped. Returns
+    the score (a :class:`~darcyan.eval.dense_scores.DenseEvaluation`, or ``None``), which the
+    picture draws."""
     from .dense.maps import UNMAPPED
 
     check = dense.check
@@ -218,9 +221,11 @@ def _say_dense(say, target: str, source: str, dense, shapes, truth) -> None:
         print(f"darcyan: warning: {target}: dense map not trusted (its orientation disagrees with its "
               f"landmarks, or it set aside feature matches the sparse stage was sure of): look at it "
               f"(--plot)", file=sys.stderr)
+    scored = None
     if truth is not None:
         from .eval.dense_scores import evaluate_dense
 
+        say("dense map: scoring it against the ground truth")
         scored = evaluate_dense(shapes[0].mesh, shapes[1].mesh, dense.target, truth, target_solver=shapes[1].solver)
         print(f"darcyan: dense map: {int((scored.errors <= scored.threshold).sum())} of {len(scored.errors)} "
               f"vertices within {scored.threshold:g} sqrt(area), mean error {scored.mean:.4f}", file=sys.stderr)
@@ -228,6 +233,7 @@ def _say_dense(say, target: str, source: str, dense, shapes, truth) -> None:
     if left_out:
         print(f"darcyan: warning: {source}: {left_out} vertices outside the matched component "
               f"are written with target_vertex {UNMAPPED}", file=sys.stderr)
+    return scored
 
 
 def _dense_folder(output: str | None, targets: list) -> None:

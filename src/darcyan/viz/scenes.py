@@ -432,7 +432,7 @@ def position_colours(mesh: Mesh) -> np.ndarray:
 
 
 def dense_scene(source: Shape, target: Shape, dense, truth: GroundTruth | None = None,
-                threshold: float = DEFAULT_THRESHOLD) -> DenseScene:
+                threshold: float = DEFAULT_THRESHOLD, scored=None) -> DenseScene:
     """The :class:`DenseScene` of ``dense`` (a :class:`darcyan.dense.maps.DenseMap`, input
     numbering) between prepared shapes ``source`` and ``target``; with ``truth``, scored on the
     sample of :func:`darcyan.eval.dense_scores.evaluate_dense`."""
@@ -450,7 +450,9 @@ def dense_scene(source: Shape, target: Shape, dense, truth: GroundTruth | None =
         colours_2 = colours_1[np.flatnonzero(mapped)[pulled]]
     samples = errors = None
     if truth is not None:
-        scored = evaluate_dense(mesh_1, mesh_2, dense.target, truth, target_solver=target.solver, threshold=threshold)
+        if scored is None:  # the scores already made of this map (``scored``) are not made again
+            scored = evaluate_dense(mesh_1, mesh_2, dense.target, truth, target_solver=target.solver,
+                                    threshold=threshold)
         samples, errors = source.mesh_index(scored.source_vertices), scored.errors
     return DenseScene(mesh_1, mesh_2, source.name, target.name, colours_1, colours_2, samples, errors, threshold,
                       dict(getattr(dense, "check", {}) or {}), overview_camera(mesh_1), overview_camera(mesh_2))
