@@ -7,7 +7,23 @@ import json
 
 import pytest
 
-from darcyan.config import DESCRIBE, MATCH, PREPARE, SECTIONS, DarcyanConfig, MirrorTest, _stage_of, _staged_fields
+from darcyan.config import (
+    DENSE,
+    DESCRIBE,
+    LANDMARK_MODES,
+    MATCH,
+    MATCHING_MODES,
+    METHODS,
+    PREPARE,
+    SAMPLINGS,
+    SECTIONS,
+    SEED_STATISTICS,
+    DarcyanConfig,
+    MirrorTest,
+    _stage_of,
+    _staged_fields,
+    field_docs,
+)
 from darcyan.errors import ConfigError
 
 
@@ -27,12 +43,24 @@ def _other_value(value):
     raise AssertionError(f"no other value for {value!r}")
 
 
+# The choices of each setting that is a name: another one of them is its other value.
+CHOICES = {"matching": MATCHING_MODES, "method": METHODS, "landmarks": LANDMARK_MODES, "sampling": SAMPLINGS,
+           "seed_statistic": SEED_STATISTICS}
+
+
 def _changed(config: DarcyanConfig, dotted: str) -> DarcyanConfig:
+    leaf = dotted.split(".")[-1]
+
+    def other(value):
+        if isinstance(value, str):
+            return next(choice for choice in CHOICES[leaf] if choice != value)
+        return _other_value(value)
+
     if "." not in dotted:
-        return config.replace(**{dotted: _other_value(getattr(config, dotted))})
+        return config.replace(**{dotted: other(getattr(config, dotted))})
     section, leaf = dotted.split(".")
     owner = getattr(config, section)
-    return config.replace(**{section: dataclasses.replace(owner, **{leaf: _other_value(getattr(owner, leaf))})})
+    return config.replace(**{section: dataclasses.replace(owner, **{leaf: other(getattr(owner, leaf))})})
 
 
 LEAVES = [name for name, _ in _staged_fields(DarcyanConfig())]
@@ -41,8 +69,28 @@ LEAVES = [name for name, _ in _staged_fields(DarcyanConfig())]
 def test_every_setting_is_found():
     """The walk over the fields reaches the sections: the keys below cannot pass vacuously."""
     assert len(LEAVES) > 40
-    assert {"radius", "matching", "mirror.handedness_weight", "heat.vertices", "denoising.block"} <= set(LEAVES)
-    assert {_stage_of(DarcyanConfig(), name) for name in LEAVES} == {PREPARE, DESCRIBE, MATCH}
+    assert {"radius", "matching", "mirror.handedness_weight", "heat.vertices", "denoising.block",
+            "dense.seed_statistic"} <= set(LEAVES)
+    assert {_stage_of(DarcyanConfig(), name) for name in LEAVES} == {PREPARE, DESCRIBE, MATCH, DENSE}
+
+
+def test_the_dense_settings_are_a_section_set_by_a_config_file():
+    changed = DarcyanConfig().updated({"dense": {"ensemble": 3}}, "settings.json")
+    assert changed.dense.ensemble == 3 and changed.describe_fingerprint() == DarcyanConfig().describe_fingerprint()
+    assert changed.fingerprint(DENSE) != DarcyanConfig().fingerprint(DENSE)
+    with pytest.raises(ConfigError, match="settings.json: unknown setting dense.ensembles"):
+        DarcyanConfig().updated({"dense": {"ensembles": 3}}, "settings.json")
+    with pytest.raises(ConfigError, match="ensemble"):
+        DarcyanConfig().updated({"dense": {"ensemble": 0}})
+
+
+@pytest.mark.parametrize("section", [DarcyanConfig, *SECTIONS.values()])
+def test_every_field_is_documented_once_in_its_class(section):
+    """The command-line help and the settings reference read these: no field without its text."""
+    documented = field_docs(section)
+    for field in dataclasses.fields(section):
+        if field.name not in SECTIONS or section is not DarcyanConfig:
+            assert documented.get(field.name), f"{section.__name__}.{field.name} has no documentation"
 
 
 @pytest.mark.parametrize("name", LEAVES)

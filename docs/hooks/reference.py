@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
-import re
 
 
 def on_page_markdown(markdown: str, page, config, files) -> str:
@@ -42,16 +41,16 @@ def _help(parser) -> str:
 
 def settings_reference() -> str:
     from darcyan.config import SECTIONS, DarcyanConfig
-    from darcyan.dense.config import DenseConfig
 
     parts = [_table("DarcyanConfig", DarcyanConfig, "")]
     parts += [_table(f"DarcyanConfig.{name}", cls, f"{name}.") for name, cls in SECTIONS.items()]
-    parts.append(_table("DenseConfig (darcyan.dense)", DenseConfig, ""))
     return "\n\n".join(parts)
 
 
 def _table(title: str, cls, prefix: str) -> str:
-    docs = attribute_docs(cls)
+    from darcyan.config import field_docs
+
+    docs = field_docs(cls)
     rows = [f"## {title}", "", inspect.cleandoc(cls.__doc__ or "").split("\n\n")[0].replace("\n", " "), "",
             "| setting | default | stage | what it does |", "| --- | --- | --- | --- |"]
     for field in dataclasses.fields(cls):
@@ -62,28 +61,3 @@ def _table(title: str, cls, prefix: str) -> str:
         text = docs.get(field.name, "").replace("|", "\\|")
         rows.append(f"| `{prefix}{field.name}` | `{default!r}` | {stage} | {text} |")
     return "\n".join(rows)
-
-
-def attribute_docs(cls) -> dict:
-    """``{field: text}`` from the ``Attributes:`` section of ``cls``'s docstring (an entry
-    ``a, b: text`` documents both fields)."""
-    doc = inspect.cleandoc(cls.__doc__ or "")
-    if "Attributes:" not in doc:
-        return {}
-    section = doc.split("Attributes:", 1)[1]
-    out: dict = {}
-    names: list = []
-    for line in section.splitlines():
-        if not line.strip():
-            continue
-        if not line.startswith(" "):
-            break  # the section ended
-        entry = re.match(r"^ {4}([a-z_][a-z0-9_, ]*):\s?(.*)$", line)
-        if entry:
-            names = [n.strip() for n in entry.group(1).split(",")]
-            for n in names:
-                out[n] = entry.group(2).strip()
-        elif names:
-            for n in names:
-                out[n] += " " + line.strip()
-    return out

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ._version import __version__
-from .config import MATCHING_MODES, DarcyanConfig
+from .config import MATCHING_MODES, DarcyanConfig, field_summary
 from .errors import ConfigError, DarcyanError
 from .geometry.mesh import MeshWarning
 from .io.cache import ShapeCache
@@ -23,34 +23,19 @@ from .io.cache import ShapeCache
 EXIT_USAGE = 2
 
 
-# Help for each DarcyanConfig field that is a command-line option (``--name-with-dashes``).
-CONFIG_HELP = {
-    "levels": "n, geodesic level curves",
-    "radial_lines": "m, radial geodesic lines",
-    "radius": "R, radius of the outer level curve",
-    "interpolation": "samples per radial-line gap on each level curve (the paper's interpolation step)",
-    "curvature_smoothing": "one-ring smoothing iterations of the curvatures",
-    "denoise_area_ratio": "Taubin-smooth a mesh whose area exceeds this multiple of a smoothed copy's (vertex noise), 0 = never",
-    "agd_sources": "fast-marching sources approximating AGD",
-    "agd_smoothing": "heat-diffusion length applied to AGD before taking maxima, 0 = the paper's plain AGD",
-    "proxy_vertices": "AGD of larger meshes is computed on a copy decimated to this many vertices, 0 = never",
-    "extremity_radius": "AGD maxima are maxima within this geodesic radius",
-    "min_agd_quantile": "ignore AGD maxima below this quantile of AGD",
-    "tip_gain": "move a feature point to its extremity's sharpest tip (heat kernel at the AGD smoothing's scale) "
-                "where that is this many times sharper, 0 = never",
-    "tip_radius": "an extremity's top lies within this geodesic radius of its feature point",
-    "tip_agd_drop": "an extremity's top: the vertices within --tip-radius whose AGD is at most this much below the feature point's",
-    "max_features": "at most this many feature points, 0 = all",
-    "max_match_distance": "leave out matches whose descriptor distance exceeds this multiple of the median over all "
-                          "feature-point pairs, 0 = keep all",
-}
+# The DarcyanConfig fields that are command-line options (``--name-with-dashes``); their help is
+# the first sentence of the field's own documentation (config.field_summary).
+CONFIG_OPTIONS = ("levels", "radial_lines", "radius", "interpolation", "curvature_smoothing", "denoise_area_ratio",
+                  "agd_sources", "agd_smoothing", "proxy_vertices", "extremity_radius", "min_agd_quantile", "tip_gain",
+                  "tip_radius", "tip_agd_drop", "max_features", "max_match_distance")
 
 
 def _add_config_options(parser: argparse.ArgumentParser) -> None:
     defaults = DarcyanConfig()
     group = parser.add_argument_group("method parameters (lengths in units of sqrt(surface area))")
-    for name, text in CONFIG_HELP.items():
+    for name in CONFIG_OPTIONS:
         value = getattr(defaults, name)
+        text = field_summary(DarcyanConfig, name).replace("%", "%%")
         group.add_argument(f"--{name.replace('_', '-')}", type=type(value), default=None,
                            help=f"{text} (default {value})")
     group.add_argument("--paper", action="store_true",
@@ -81,7 +66,7 @@ def _config(args: argparse.Namespace) -> DarcyanConfig:
         except ConfigError as exc:  # name the file whose value it is
             message = str(exc)
             raise ConfigError(message if message.startswith(args.config) else f"{args.config}: {message}") from None
-    values = {name: getattr(args, name) for name in CONFIG_HELP if getattr(args, name, None) is not None}
+    values = {name: getattr(args, name) for name in CONFIG_OPTIONS if getattr(args, name, None) is not None}
     if getattr(args, "matching", None):
         values["matching"] = args.matching
     if getattr(args, "strict", False):
@@ -141,10 +126,10 @@ def cmd_match(args: argparse.Namespace) -> int:
         if value is not None and not args.dense:
             raise DarcyanError(f"{option} applies to --dense maps only")
     if args.dense:
-        from .dense.config import DenseConfig
 
         try:
-            dense_config = DenseConfig() if args.ensemble is None else DenseConfig(ensemble=args.ensemble)
+            dense_config = config.dense if args.ensemble is None else dataclasses.replace(config.dense,
+                                                                                          ensemble=args.ensemble)
         except ConfigError as exc:
             raise ConfigError(f"--ensemble: {exc}") from None
         if args.sampling is not None:

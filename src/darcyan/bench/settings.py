@@ -38,10 +38,8 @@ class BenchSettings:
             return None
         import dataclasses
 
-        from ..dense.config import DenseConfig
-
         return {"samples": self.dense_samples, "seed": self.dense_seed,
-                "config": dataclasses.asdict(DenseConfig()),
+                "config": dataclasses.asdict(self.config.dense),
                 "pyfm": dataclasses.asdict(pyfm.DENSE_PIPELINE)}
 
     def as_dict(self) -> dict:

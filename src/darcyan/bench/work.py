@@ -294,7 +294,6 @@ def _verified(job: dict, target: Shape, correspondence) -> tuple:
     (:func:`darcyan.dense.verify.verified_file_matches`: kept in the run's cache): the matching
     and what the record says of it (``verified``: the seed's rank, 0 for the sparse matching;
     ``verify_failed`` when it could not be verified, the matching kept)."""
-    from ..dense.config import DenseConfig
     from ..dense.maps import DENSE_FAILURES
     from ..dense.verify import verified_file_matches
 
@@ -305,7 +304,8 @@ def _verified(job: dict, target: Shape, correspondence) -> tuple:
 
     try:
         chosen, about = verified_file_matches(job["source_path"], job["target_path"], correspondence, shapes,
-                                              settings.config, DenseConfig(), settings.repair, _cache_of(job))
+                                              settings.config, settings.config.dense, settings.repair,
+                                              _cache_of(job))
     except DENSE_FAILURES as exc:
         return correspondence, {"verify_failed": str(exc) if isinstance(exc, DarcyanError)
                                 else f"{type(exc).__name__}: {exc}"}
@@ -343,7 +343,6 @@ def _seed_score(job: dict, target: Shape, correspondence, seed: int) -> dict:
 
 def _dense_records(job: dict, target: Shape) -> list:
     """The dense maps of one pair (``job["dense_methods"]``), scored on the same sampled vertices."""
-    from ..dense.config import DenseConfig
     from ..dense.maps import DENSE_FAILURES, UNMAPPED, dense_map, pyfm_own_map
     from ..eval.dense_scores import evaluate_dense_maps
     from ..eval.metrics import GroundTruth
@@ -368,7 +367,7 @@ def _dense_records(job: dict, target: Shape) -> list:
                                               settings.config)
                 info["matches"] = len(correspondence)
                 start = time.perf_counter()  # the dense stage only
-                result = dense_map(source, target, correspondence, DenseConfig())
+                result = dense_map(source, target, correspondence, settings.config.dense)
             else:
                 result = pyfm_own_map(source.mesh, target.mesh, source.n_input_vertices)
             seconds = time.perf_counter() - start
