@@ -84,3 +84,23 @@ def test_bad_arguments_are_one_clear_error(tmp_path):
         darcyan.correspond(mesh, [])
     with pytest.raises(DarcyanError, match="missing.off"):
         darcyan.correspond(tmp_path / "missing.off", mesh)
+
+
+def test_the_matches_follow_the_seed_of_their_dense_map():
+    """A dense map seeded by an alternative contradicts the sparse matching: the matches given
+    with the map are that alternative, the sparse matching first among its alternatives."""
+    from conftest import tip_correspondence
+
+    from darcyan.correspond import matches_of_map
+    from darcyan.dense.maps import DenseMap
+
+    tips = synthetic.figure_tips()
+    right = tip_correspondence(tips, tips)
+    wrong = darcyan.Correspondence(tips, np.roll(tips, 1), np.zeros(len(tips)), None, alternatives=(right,))
+    seeded_by = lambda rank, start="matches": DenseMap(np.zeros(3, np.int64), np.zeros((0, 2), np.int64),  # noqa: E731
+                                                       check={"seed": rank, "start": start})
+    assert matches_of_map(wrong, seeded_by(0)) is wrong
+    assert matches_of_map(wrong, seeded_by(2, "spectral")) is wrong
+    chosen = matches_of_map(wrong, seeded_by(1))
+    np.testing.assert_array_equal(chosen.target_vertex, tips)
+    assert chosen.alternatives[0] is wrong

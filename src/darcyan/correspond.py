@@ -33,7 +33,8 @@ class PairResult:
     Attributes:
         target: the target's name (its path, or the name of a mesh given in memory).
         matches: the feature matches (:class:`~darcyan.method.pipeline.Correspondence`, input
-            numbering), verified when that was asked or the matching was in doubt.
+            numbering), verified when that was asked or the matching was in doubt; with a dense
+            map, the matching that seeded it (:func:`matches_of_map`).
         dense: the dense map (:class:`~darcyan.dense.maps.DenseMap`) with ``dense=True``, else ``None``.
         verification: what the verification said (``seed``, ``signatures``, ``clear``,
             ``cached``; ``why``: why it was made; ``failed``: why it could not be made), or
@@ -231,9 +232,22 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
                                  progress=lambda stage: say(f"dense map: {stage}"))
             except DENSE_FAILURES as exc:  # one line, never a traceback
                 raise DarcyanError(f"{names[0]} -> {target}: no dense map: {exc}") from None
+            matches = matches_of_map(matches, made)
         shapes = (shape_of(0), shape_of(index)) if index in prepared else None
         pairs.append(PairResult(target, matches, made, verification, shapes))
     return Correspondences(names[0], tuple(pairs), tuple(descriptions), dense)
+
+
+def matches_of_map(matches: Correspondence, made: DenseMap) -> Correspondence:
+    """The feature matches a dense map agrees with: ``matches`` itself, or the alternative
+    matching that seeded the map instead (its own dense map contradicted the sparse one), the
+    others kept as its alternatives. A map started without the matches leaves them as they are."""
+    from .dense.seeds import matching_of_seed
+
+    check = made.check
+    if check.get("start", "matches") != "matches" or check.get("seed", 0) == 0:
+        return matches
+    return matching_of_seed(matches, check["seed"])
 
 
 def _input(item):
