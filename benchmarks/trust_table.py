@@ -20,10 +20,11 @@ from pathlib import Path
 import numpy as np
 
 
-def dense_records(folder: Path) -> list:
-    """The darcyan dense records of one bench folder (the journal: finished pairs, even of a run in progress)."""
+def dense_records(folder: Path, method: str = "darcyan") -> list:
+    """The dense records of ``method`` in one bench folder (the journal: finished pairs, even of a
+    run in progress)."""
     rows = [json.loads(line) for line in (folder / "pairs.jsonl").read_text().splitlines() if line.strip()]
-    return [r for r in rows if r.get("kind") == "dense" and r.get("method") == "darcyan"]
+    return [r for r in rows if r.get("kind") == "dense" and r.get("method") == method]
 
 
 def summary(records: list, right: float) -> dict:
@@ -66,6 +67,14 @@ def main(argv=None) -> int:
     if len(args.folders) > 1:
         row = summary(pooled, args.right)
         print("| pooled | " + " | ".join(_cell(row[c]) for c in columns) + f" | {row['starts']} | |")
+    baseline = [(folder, dense_records(folder, "pyfm")) for folder in args.folders]
+    if any(records for _, records in baseline):  # pyFM's own pipeline in the same runs, for contrast
+        print("\n| set | pyFM pairs | collapsed | wholly wrong | within | mean x100 |\n| --- | --- | --- | --- | --- | --- |")
+        for folder, records in baseline:
+            if records:
+                row = summary(records, args.right)
+                print(f"| {folder.name} | {row['pairs']} | {row['collapsed']} | {row['wholly wrong']} | "
+                      f"{_cell(row['within'])} | {_cell(row['mean x100'])} |")
     return 0
 
 
