@@ -50,9 +50,9 @@ def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = Den
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
     scoring = config if full_basis else seed_scoring_config(config)
-    seed, seeds, _, _ = choose_seed(shape_1, shape_2, correspondence, scoring, lambda stage: None, {},
-                                    spectral_start=False)
-    return matching_of_seed(correspondence, seed.rank), check_of_seeds(seed, seeds, config.seed_margin)
+    choice = choose_seed(shape_1, shape_2, correspondence, scoring, lambda stage: None, {}, spectral_start=False)
+    return matching_of_seed(correspondence, choice.seed.rank), check_of_seeds(choice.seed, choice.seeds,
+                                                                               config.seed_margin)
 
 
 def seed_scoring_config(config: DenseConfig) -> DenseConfig:
@@ -104,10 +104,22 @@ def check_of_seeds(seed, seeds: list, margin: float) -> dict:
     return check
 
 
+@dataclass(frozen=True)
+class SeedChoice:
+    """What :func:`choose_seed` decided: the ``seed`` chosen among the usable ``seeds``
+    (:class:`Seed` each), and both shapes' ZoomOut ``samples`` ``((s_1,), (s_2,))`` and ``bases``
+    ``((n_1, K), (n_2, K))`` the dense map goes on with (``(None, None)`` when none was needed)."""
+
+    seed: "Seed"
+    seeds: list
+    samples: tuple
+    bases: tuple
+
+
 def choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, timings: dict,
-                spectral_start: bool = True) -> tuple:
-    """``(seed, seeds, samples, bases)``: the ZoomOut samples and bases of both shapes, the
-    usable seeds and the one chosen (see :func:`_chosen_seed`). When no matching gives
+                spectral_start: bool = True) -> SeedChoice:
+    """The :class:`SeedChoice`: the ZoomOut samples and bases of both shapes, the usable seeds
+    and the one chosen (see :func:`_chosen_seed`). When no matching gives
     :data:`~darcyan.dense.landmarks.MIN_LANDMARKS` consistent landmarks and ``spectral_start``,
     the one seed is the landmarks a short spectral map finds
     (:func:`~darcyan.dense.start.spectral_matching`; its ``start`` is ``"spectral"``)."""
@@ -135,7 +147,7 @@ def choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, timi
         raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: fewer than {MIN_LANDMARKS} consistent landmark "
                            f"matches, a dense map needs at least {MIN_LANDMARKS}")
     timings["landmarks"] = time.perf_counter() - t
-    return _chosen_seed(seeds, config.seed_margin), seeds, samples, bases
+    return SeedChoice(_chosen_seed(seeds, config.seed_margin), seeds, samples, bases)
 
 
 @dataclass(frozen=True)

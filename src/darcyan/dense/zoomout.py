@@ -193,8 +193,8 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
 
 
 def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21: np.ndarray,
-            config: "DenseConfig", fields_1: np.ndarray | None = None,
-            fields_2: np.ndarray | None = None, coarse_1: np.ndarray | None = None,
+            config: "DenseConfig", coords_1: np.ndarray | None = None,
+            coords_2: np.ndarray | None = None, coarse_1: np.ndarray | None = None,
             coarse_2: np.ndarray | None = None, steady_1: np.ndarray | None = None,
             steady_2: np.ndarray | None = None, values_1: np.ndarray | None = None,
             values_2: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -209,8 +209,9 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
     eigenvalues are given), then update both vertex maps by nearest neighbours of the
     embeddings of :func:`map_embeddings` (ZoomOut, Melzi et al. 2019, with the bijectivity and
     orthogonality terms of Ren et al., *Discrete Optimization for Shape Matching*, 2021); each
-    map is :func:`fit_width` x k (rectangular from ``config.margin_from`` on). ``coarse_i (s_i,
-    c)``: coordinates that join the embeddings, as they are, in the steps of size at most
+    map is :func:`fit_width` x k (rectangular from ``config.margin_from`` on). ``coords_i (s_i,
+    c)``: the landmark coordinates, weighed by ``config.landmark_weight`` in every step (see
+    :func:`map_embeddings`); ``coarse_i (s_i, c)``: coordinates that join the embeddings, as they are, in the steps of size at most
     ``config.signature_until`` only (the weighted point signatures); ``steady_i (s_i, t)``:
     coordinates that join them in every step (the weighted signature turns); ``values_i (K,)``:
     the bases' eigenvalues, for the commutativity term of the fits (``config.commutativity``;
@@ -236,9 +237,9 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
         if i < len(sizes) - 1:
             g_1, g_2 = (coarse_1, coarse_2) if k <= config.signature_until else (None, None)
             g_1, g_2 = _joined(g_1, steady_1), _joined(g_2, steady_2)
-            q, r = map_embeddings(b1, b2, c_12, c_21, config, fields_1, fields_2, g_1, g_2)
+            q, r = map_embeddings(b1, b2, c_12, c_21, config, coords_1, coords_2, g_1, g_2)
             map_12 = nearest_rows(r, q)
-            q, r = map_embeddings(b2, b1, c_21, c_12, config, fields_2, fields_1, g_2, g_1)
+            q, r = map_embeddings(b2, b1, c_21, c_12, config, coords_2, coords_1, g_2, g_1)
             map_21 = nearest_rows(r, q)
     return c_12, c_21
 
