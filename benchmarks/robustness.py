@@ -118,26 +118,42 @@ def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0)
 
 
 def level_set_copy(mesh: Mesh, step: float, offset: float, seed: int = 0) -> Mesh:
-    """The outer sheet of the surface at distance ``offset`` from ``mesh`` (marching cubes on a grid
-    of ``step``; both in sqrt(area) units), decimated to ``mesh``'s vertex count. Parts of
-    ``mesh`` closer than twice the offset are one part of the copy."""
+    """The surface at distance ``offset`` outside ``mesh`` (marching cubes on a grid of ``step``
+    over its signed distance; both in sqrt(area) units), decimated to ``mesh``'s vertex count.
+    Parts of ``mesh`` closer than twice the offset are one part of the copy. The distance is
+    signed (negative inside), so that the level set is one outer sheet: an unsigned distance also
+    has a sheet inside every part thicker than twice the offset, which a coarse grid merges with
+    the outer one where the part is thin (a copy with half the original's volume)."""
     import fast_simplification
     import trimesh
+    from scipy import ndimage
     from skimage.measure import marching_cubes
 
     surface = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
     scale = np.sqrt(surface.area)
     step, offset = step * scale, offset * scale
-    points = trimesh.sample.sample_surface(surface, SURFACE_SAMPLES, seed=seed)[0]
+    points, face = trimesh.sample.sample_surface(surface, SURFACE_SAMPLES, seed=seed)
+    normals = surface.face_normals[face]
     low = mesh.vertices.min(axis=0) - offset - 3 * step
     axes = [np.arange(a, b + step, step) for a, b in zip(low, mesh.vertices.max(axis=0) + offset + 3 * step)]
+    shape = [len(a) for a in axes]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    far = offset + 3 * step  # farther grid points only need to be outside the level
-    distance = cKDTree(points).query(grid, distance_upper_bound=far, workers=-1)[0]
-    distance = np.minimum(distance, far).reshape([len(a) for a in axes])
-    vertices, faces, _, _ = marching_cubes(distance, level=offset, spacing=(step,) * 3)
+    far = offset + 3 * step  # farther grid points only need their side of the surface
+    distance, nearest = cKDTree(points).query(grid, distance_upper_bound=far, workers=-1)
+    near = np.isfinite(distance)
+    side = np.ones(len(grid))
+    towards = np.einsum("ij,ij->i", grid[near] - points[nearest[near]], normals[nearest[near]])
+    side[near] = np.where(towards < 0, -1.0, 1.0)  # the nearest sample's outward normal
+    # Far points lie outside when the far region they belong to reaches the grid's border.
+    labels, _ = ndimage.label((~near).reshape(shape))
+    border = np.unique(np.concatenate([labels[[0, -1]].ravel(), labels[:, [0, -1]].ravel(),
+                                       labels[:, :, [0, -1]].ravel()]))
+    inside = (~near) & ~np.isin(labels.ravel(), border[border > 0])
+    side[inside] = -1.0
+    signed = (side * np.where(near, distance, far)).reshape(shape)
+    vertices, faces, _, _ = marching_cubes(signed, level=offset, spacing=(step,) * 3)
     level = trimesh.Trimesh(vertices + low, faces, process=True)
-    outer = max(level.split(only_watertight=False), key=lambda part: part.area)  # inner sheets of thick parts
+    outer = max(level.split(only_watertight=False), key=lambda part: part.area)  # bubbles, if any, left out
     v, f = fast_simplification.simplify(outer.vertices, outer.faces, target_count=2 * mesh.n_vertices)
     return Mesh(v, without_nonmanifold_edges(f))
 
