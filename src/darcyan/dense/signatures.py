@@ -17,11 +17,11 @@ from .landmarks import orientation_coordinates
 
 def point_signature(shape, config: DenseConfig) -> np.ndarray:
     """``(n, len(config.signature_lengths))`` the shape's mean curvature diffused over each of
-    ``config.signature_lengths`` (:func:`darcyan.method.symmetry.curvature_signature`: intrinsic
+    ``config.signature_lengths`` (:func:`darcyan.geometry.heat.curvature_signature`: intrinsic
     enough to survive a change of pose, different on the front and the back of a body), on the
     coarse proxy of a large mesh."""
     from ..config import DarcyanConfig
-    from ..method.symmetry import shape_signature
+    from ..geometry.heat import shape_signature
 
     describe = DarcyanConfig()  # the describe stage's curvature smoothing and diffusion steps
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..config import DarcyanConfig, HeatKernel
 from ..geometry.geodesics import GeodesicSolver, LocalGeodesicSolver
+from ..geometry.heat import heat_diffuse, heat_kernel_diagonal  # noqa: F401 (darcyan.method.features.*)
 from ..geometry.mesh import Mesh
 from ..geometry.operators import mixed_voronoi_area
 
@@ -89,26 +90,6 @@ def average_geodesic_distance(mesh: Mesh, solver: GeodesicSolver, sources: int, 
     return AGD(values, src)
 
 
-def heat_diffuse(mesh: Mesh, values: np.ndarray, length: float, area: np.ndarray | None = None,
-                 steps: int = HeatKernel().diffusion_steps, laplacian=None) -> np.ndarray:
-    """Diffuse ``values (n,)`` for the time that spreads heat over about ``length``: ``steps``
-    backward Euler steps of du/dt = Laplace(u) with total time length**2 / 2 (one factorization).
-    ``area`` (mixed Voronoi) and ``laplacian`` (cotangent), if already computed for ``mesh``."""
-    import scipy.sparse as sp
-    from scipy.sparse.linalg import splu
-
-    from ..geometry.operators import cotangent_laplacian
-
-    area = mixed_voronoi_area(mesh) if area is None else area
-    laplacian = cotangent_laplacian(mesh) if laplacian is None else laplacian
-    step = length**2 / 2 / steps
-    mass = sp.diags(area)
-    solve = splu((mass - step * laplacian).tocsc()).solve
-    for _ in range(steps):
-        values = solve(mass @ values)
-    return values
-
-
 def one_ring_maxima(mesh: Mesh, values: np.ndarray) -> np.ndarray:
     """Vertices whose value is at least that of every neighbour."""
     e = mesh.edges()
@@ -116,24 +97,6 @@ def one_ring_maxima(mesh: Mesh, values: np.ndarray) -> np.ndarray:
     np.maximum.at(neighbour_max, e[:, 0], values[e[:, 1]])
     np.maximum.at(neighbour_max, e[:, 1], values[e[:, 0]])
     return np.flatnonzero(values >= neighbour_max)
-
-
-def heat_kernel_diagonal(mesh: Mesh, length: float, heat: HeatKernel = HeatKernel()) -> np.ndarray:
-    """``(n,)`` ``k_t(v, v) = sum_i exp(-lambda_i t) phi_i(v)^2`` at ``t = length**2 / 2`` (the
-    heat kernel signature at one time; 1/area units) from the Laplace-Beltrami eigenpairs whose
-    ``exp(-lambda t)`` exceeds ``exp(-heat.decay)`` (Weyl's law: about
-    ``heat.decay / (4 pi t)`` of them on a surface of area 1). Unlike the HKS baseline
-    (:func:`darcyan.eval.baselines.heat_kernel_signature`: many times, scaled by the heat trace,
-    without the constant eigenfunction) one time, unscaled, so that ratios between vertices are
-    those of the kernel itself."""
-    from ..geometry.spectral import laplace_beltrami_spectrum
-
-    time = length**2 / 2
-    count = int(np.clip(np.ceil(heat.decay * mesh.area() / (4 * np.pi * time)), 10, 400))
-    spectrum = laplace_beltrami_spectrum(mesh, count, tol=heat.tolerance)
-    return (spectrum.vectors**2 * np.exp(-spectrum.values * time)).sum(axis=1)
-
-
 
 
 def extremities(mesh: Mesh, solver: GeodesicSolver | LocalGeodesicSolver, agd: AGD, config: DarcyanConfig,

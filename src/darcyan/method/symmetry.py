@@ -24,7 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import HeatKernel, MirrorTest
+from ..config import MirrorTest
+from ..geometry.heat import curvature_signature, shape_signature  # noqa: F401 (darcyan.method.symmetry.*)
 from ..geometry.knn import nearest_neighbours, nearest_points
 from ..geometry.sampling import sample_vertices
 
@@ -59,32 +60,6 @@ class OrientedSurface:
     signature: np.ndarray | None = None
     areas: np.ndarray | None = None
     profiles: np.ndarray | None = None
-
-
-def curvature_signature(mesh, mean_curvature: np.ndarray, lengths=MirrorTest().signature_lengths,
-                        diffusion_steps: int = HeatKernel().diffusion_steps) -> np.ndarray:
-    """``(n, len(lengths))`` mean curvature diffused over each of ``lengths``, each scaled to mean
-    magnitude 1: a cheap, intrinsic, mirror-blind signature that differs between the front and
-    the back of a torso or a limb."""
-    from .features import heat_diffuse
-
-    columns = []
-    for length in lengths:
-        c = heat_diffuse(mesh, mean_curvature, length, steps=diffusion_steps)
-        columns.append(c / max(float(np.abs(c).mean()), 1e-12))
-    return np.stack(columns, axis=1)
-
-
-def shape_signature(shape, proxy, lengths, steps: int, smoothing: int) -> np.ndarray:
-    """``(n, len(lengths))`` :func:`curvature_signature` of a prepared shape (Meyer curvatures
-    after ``smoothing`` averagings, ``steps`` diffusion steps), on its coarse ``proxy`` when there
-    is one (read back at every vertex), else on the mesh itself."""
-    if proxy is None:
-        return curvature_signature(shape.mesh, shape.curvatures(smoothing).mean, lengths, steps)
-    from ..geometry.curvature import principal_curvatures
-
-    coarse_mean = principal_curvatures(proxy.mesh, smoothing=smoothing).mean
-    return proxy.to_full(curvature_signature(proxy.mesh, coarse_mean, lengths, steps))
 
 
 def choose_orientation(candidates, surface_1: OrientedSurface | None, surface_2: OrientedSurface | None,
