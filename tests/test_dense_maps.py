@@ -256,3 +256,23 @@ def test_cli_farthest_sampling_maps_a_renumbered_file_alike(small_pose_files, tm
     assert main(["match", str(source), str(target), "--sampling", "farthest", "--no-cache"]) != 0
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--sampling applies to --dense maps only" in err[0]
+
+
+def test_the_trust_rule_condition_by_condition():
+    """trusted: orientation kept, started from the matches, no sure matching set aside, and a
+    matching in doubt whose seed stood clear (each condition alone makes a map untrusted)."""
+    import dataclasses as dc
+
+    from conftest import tip_correspondence
+
+    from darcyan.dense.maps import trusted
+
+    good = {"orientation": 0.8, "start": "matches", "seed": 0, "clear": True}
+    sure = tip_correspondence([1, 2, 3], [1, 2, 3])  # in_doubt False
+    doubt = dc.replace(sure, in_doubt=True)
+    config = DenseConfig()
+    assert trusted(good, sure, config) and trusted(good, doubt, config)
+    assert not trusted({**good, "orientation": 0.1}, sure, config)
+    assert not trusted({**good, "start": "spectral"}, doubt, config)
+    assert not trusted({**good, "seed": 2}, sure, config) and trusted({**good, "seed": 2}, doubt, config)
+    assert not trusted({**good, "clear": False}, doubt, config) and trusted({**good, "clear": False}, sure, config)

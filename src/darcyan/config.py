@@ -374,10 +374,9 @@ class DenseConfig:
         seed_margin: an alternative replaces the sparse matching only when its score is lower
             by at least this share (``DenseMap.check["clear"]``: no other seed scored within
             this share of the chosen one's).
-        trust_orientation: a map is ``trusted`` (``DenseMap.check``) when its orientation
+        trust_orientation: a map is ``trusted`` (``DenseMap.check``) only when its orientation
             agreement is at least this (a map flipped against its landmarks scores -0.5 to -0.7,
-            a right one 0.6 to 0.9) and it did not set aside a matching the sparse stage was sure
-            of (:func:`~darcyan.dense.maps.trusted`).
+            a right one 0.6 to 0.9), among other conditions (:func:`~darcyan.dense.maps.trusted`).
         local_search_above: a target mesh with more vertices than this is searched coarse to
             fine for the final map (:func:`darcyan.geometry.knn.nearest_rows_near`: near the
             image's nearest ZoomOut sample) instead of over all its vertices: O(V) instead of

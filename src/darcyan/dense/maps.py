@@ -149,14 +149,23 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
 
 
 def trusted(check: dict, correspondence, config: DenseConfig) -> bool:
-    """Whether a map's ``check`` lets it be trusted: its orientation agrees with its landmarks
-    (at least ``config.trust_orientation``), and it did not set aside a matching the sparse stage
-    was sure of (not ``in_doubt``) for an alternative: two judgments made independently, the
-    sparse stage's orientation test and the dense stage's curvature signature, then disagree
-    (``docs/decisions/every-pair.md``)."""
-    overrode = (check.get("start", "matches") == "matches" and check.get("seed", 0) != 0
-                and not getattr(correspondence, "in_doubt", True))
-    return bool(check["orientation"] >= config.trust_orientation and not overrode)
+    """Whether a map's ``check`` lets it be trusted. All of:
+
+    - its orientation agrees with its landmarks (at least ``config.trust_orientation``);
+    - it started from the feature matches (a map started without them, :mod:`darcyan.dense.start`,
+      took its landmarks from a short map nothing else checked);
+    - it did not set aside a matching the sparse stage was sure of (not ``in_doubt``) for an
+      alternative: two independent judgments, the sparse stage's orientation test and the dense
+      stage's curvature signature, would disagree;
+    - a matching the sparse stage was in doubt of stood clear of its rivals in the dense stage
+      (``check["clear"]``): then the dense stage's judgment is the only one, and it must be plain.
+
+    Measured on the shared sets and the hard copies: ``docs/decisions/every-pair.md``."""
+    in_doubt = getattr(correspondence, "in_doubt", True)
+    from_matches = check.get("start", "matches") == "matches"
+    overrode = from_matches and check.get("seed", 0) != 0 and not in_doubt
+    return bool(check["orientation"] >= config.trust_orientation and from_matches and not overrode
+                and (check.get("clear", True) or not in_doubt))
 
 
 def input_map(shape_1, shape_2, local: np.ndarray) -> np.ndarray:
