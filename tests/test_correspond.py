@@ -91,7 +91,7 @@ def test_the_matches_follow_the_seed_of_their_dense_map():
     with the map are that alternative, the sparse matching first among its alternatives."""
     from conftest import tip_correspondence
 
-    from darcyan.correspond import matches_of_map
+    from darcyan.api import matches_of_map
     from darcyan.dense.maps import DenseMap
 
     tips = synthetic.figure_tips()

@@ -170,6 +170,9 @@ def test_the_matching_of_a_seed_keeps_the_others_as_alternatives():
     assert matching_of_seed(sparse, 0) is sparse
     chosen = matching_of_seed(sparse, 2)
     assert chosen.source_vertex.tolist() == [1] and chosen.alternatives == (sparse, others[0], others[2])
+    # the sparse stage's doubt is the matching's, whichever seed is taken (the trust rule reads it)
+    doubtful = dataclasses.replace(sparse, in_doubt=True, margin=0.1)
+    assert matching_of_seed(doubtful, 2).in_doubt and matching_of_seed(doubtful, 2).margin == 0.1
     with pytest.raises(DarcyanError, match="seed 4: the matching has 3 alternatives"):
         matching_of_seed(sparse, 4)
 

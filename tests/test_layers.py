@@ -14,7 +14,7 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "darcyan"
 
 # Lowest first. A module may import its own layer and the layers before it.
-LAYERS = ("errors", "_version", "config", "parallel", "geometry", "io", "method", "dense", "eval", "correspond", "viz",
+LAYERS = ("errors", "_version", "config", "parallel", "geometry", "io", "method", "dense", "eval", "api", "viz",
           "bench", "demo", "cli", "__init__", "__main__")
 
 

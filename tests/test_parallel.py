@@ -1,6 +1,8 @@
 """The library's own thread policy (darcyan.parallel): its entry points run BLAS with one thread
 by default, whatever the caller's pools, as the command does."""
 
+import os
+
 import numpy as np
 import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
@@ -61,6 +63,40 @@ def test_the_public_entry_points_own_their_threads():
 def test_a_bad_thread_count_is_one_clear_error(bad, monkeypatch):
     with pytest.raises(DarcyanError, match="threads must be"):
         darcyan.set_threads(bad)
-    monkeypatch.setenv("DARCYAN_THREADS", "many")
-    with pytest.raises(DarcyanError, match="DARCYAN_THREADS"):
-        darcyan.get_threads()
+    for value in ("many", "-3"):
+        monkeypatch.setenv("DARCYAN_THREADS", value)
+        with pytest.raises(DarcyanError, match="DARCYAN_THREADS"):
+            darcyan.get_threads()
+
+
+def test_the_commands_thread_setting_does_not_outlive_it(monkeypatch, capsys):
+    from darcyan.cli import main
+
+    monkeypatch.delenv("DARCYAN_THREADS", raising=False)
+    darcyan.set_threads(3)
+    assert main(["features", "missing.off", "--threads", "4"]) == 2  # fails on its input, after setting it
+    assert darcyan.get_threads() == 3
+
+
+def test_limits_set_in_two_threads_are_restored_when_both_leave():
+    import threading
+
+    if not blas_threads():
+        pytest.skip("no BLAS thread pool to inspect")
+    before, omp = blas_threads(), os.environ.get("OMP_NUM_THREADS")
+    entered, leave = threading.Barrier(3), threading.Event()
+
+    def hold():
+        with limited_threads(1):
+            entered.wait()
+            leave.wait()
+
+    workers = [threading.Thread(target=hold) for _ in range(2)]
+    for worker in workers:
+        worker.start()
+    entered.wait()
+    assert os.environ["OMP_NUM_THREADS"] == "1"  # the process's, whatever each pool's own scope
+    leave.set()
+    for worker in workers:
+        worker.join()
+    assert blas_threads() == before and os.environ.get("OMP_NUM_THREADS") == omp

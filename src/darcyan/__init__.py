@@ -12,8 +12,8 @@ L2 nearest-neighbour matching.
 """
 
 from ._version import __version__  # noqa: F401 (darcyan.__version__)
+from .api import Correspondences, PairResult, correspond
 from .config import DarcyanConfig
-from .correspond import Correspondences, PairResult, correspond
 from .errors import ConfigError, DarcyanError, DependencyError, MeshError
 from .geometry.curvature import Curvatures, principal_curvatures
 from .geometry.geodesics import GeodesicSolver

@@ -7,6 +7,7 @@ and exit status 2; warnings (components left out, polygons split) are one line e
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import sys
 import warnings
@@ -111,7 +112,7 @@ def _note_changes(shape) -> None:
 
 
 def cmd_match(args: argparse.Namespace) -> int:
-    from .correspond import correspond
+    from .api import correspond
     from .method.pipeline import load_shape
 
     config = _config(args)
@@ -171,7 +172,7 @@ def cmd_match(args: argparse.Namespace) -> int:
             print(f"darcyan: {score.summary()}", file=sys.stderr)
         scored = None
         if dense is not None:
-            scored = _say_dense(say, target, args.source, dense, shapes, truth if args.truth else None)
+            scored = _say_dense(say, target, args.source, dense, shapes, truth if args.truth else None, args.quiet)
         if (args.plot or args.html) and args.dense:  # the dense map: texture transfer, errors with --truth
             from .viz.scenes import dense_scene
 
@@ -190,9 +191,10 @@ def cmd_match(args: argparse.Namespace) -> int:
     return 0
 
 
-def _say_dense(say, target: str, source: str, dense, shapes, truth):
+def _say_dense(say, target: str, source: str, dense, shapes, truth, quiet: bool = False):
     """What ``darcyan match --dense`` says of a map: how it was started and checked, whether it is
-    trusted, its score against ``truth`` (when given) and the vertices it left unmapped. Returns
+    trusted (``quiet``: only when it is not), its score against ``truth`` (when given) and the
+    vertices it left unmapped. Returns
     the score (a :class:`~darcyan.eval.dense_scores.DenseEvaluation`, or ``None``), which the
     picture draws."""
     from .dense.maps import UNMAPPED
@@ -201,7 +203,8 @@ def _say_dense(say, target: str, source: str, dense, shapes, truth):
     say(f"dense map: {_seed_verdict(check)}; orientation agreement {check['orientation']:.2f} (1: kept, "
         f"-1: mirrored), landmark distortion {check['distortion']:.3f} sqrt(area)")
     if check["trusted"]:
-        print(f"darcyan: {target}: dense map trusted", file=sys.stderr)
+        if not quiet:  # --quiet: warnings only
+            print(f"darcyan: {target}: dense map trusted", file=sys.stderr)
     else:
         print(f"darcyan: warning: {target}: dense map not trusted (its orientation disagrees with its "
               f"landmarks, it started without the feature matches, it set aside matches the sparse stage was "
@@ -509,15 +512,22 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@contextlib.contextmanager
 def _thread_limit(threads: int | None):
-    """The library's thread policy (:mod:`darcyan.parallel`) set to ``--threads`` (when given), and
-    applied to the whole command (its own work between the library's calls included)."""
-    from .parallel import limited_threads, set_threads
+    """The library's thread policy (:mod:`darcyan.parallel`) set to ``--threads`` (when given) for
+    the whole command (its own work between the library's calls included), and set back after."""
+    from .parallel import _threads, limited_threads, set_threads
 
     if threads is not None and threads < 0:
         raise DarcyanError(f"--threads must be 0 (the libraries' default) or more, got {threads}")
-    set_threads(threads)
-    return limited_threads()
+    before = _threads["count"]
+    if threads is not None:
+        set_threads(threads)
+    try:
+        with limited_threads():
+            yield
+    finally:
+        _threads["count"] = before
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -21,7 +21,8 @@ from .errors import DarcyanError
 
 DEFAULT_THREADS = 1
 _threads = {"count": None}  # set_threads's value; None: DARCYAN_THREADS, else DEFAULT_THREADS
-_inside = threading.local()  # an entry point called from another keeps the outer limit
+_lock = threading.Lock()
+_depth = {"count": 0, "limits": None}  # entry points running in the process; the limit they set
 
 # Set to 1 in every worker: libraries that start a thread pool later read them.
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
@@ -65,9 +66,12 @@ def get_threads() -> int:
         return _threads["count"]
     value = os.environ.get("DARCYAN_THREADS", "")
     try:
-        return int(value) if value.strip() else DEFAULT_THREADS
+        count = int(value) if value.strip() else DEFAULT_THREADS
     except ValueError:
-        raise DarcyanError(f"DARCYAN_THREADS must be a number of threads, got {value!r}") from None
+        count = -1
+    if count < 0:
+        raise DarcyanError(f"DARCYAN_THREADS must be 0 (the libraries' default) or more threads, got {value!r}")
+    return count
 
 
 def set_threads(count: int | None) -> None:
@@ -81,28 +85,33 @@ def set_threads(count: int | None) -> None:
 @contextlib.contextmanager
 def limited_threads(count: int | None = None):
     """A context in which the thread pools loaded (and, through the environment, those loaded
-    later) run ``count`` threads (default :func:`get_threads`; 0: as they are). Nested, the outer
-    limit holds."""
+    later) run ``count`` threads (default :func:`get_threads`; 0: as they are). The pools and the
+    environment belong to the whole process: the first of nested or concurrent contexts (any
+    thread) sets the limit, the last to leave restores them."""
     count = get_threads() if count is None else count
-    if count == 0 or getattr(_inside, "active", False):
-        yield
-        return
-    from threadpoolctl import threadpool_limits
+    with _lock:
+        first = _depth["count"] == 0
+        if first and count != 0:
+            from threadpoolctl import threadpool_limits
 
-    saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
-    for name in THREAD_VARIABLES:  # for the libraries loaded later (scipy's OpenBLAS, OpenMP)
-        os.environ[name] = str(count)
-    _inside.active = True
+            _depth["saved"] = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+            for name in THREAD_VARIABLES:  # for the libraries loaded later (scipy's OpenBLAS, OpenMP)
+                os.environ[name] = str(count)
+            _depth["limits"] = threadpool_limits(count)  # for those loaded already (numpy's OpenBLAS)
+        _depth["count"] += 1
     try:
-        with threadpool_limits(count):  # for those loaded already (numpy's OpenBLAS)
-            yield
+        yield
     finally:
-        _inside.active = False
-        for name, value in saved.items():
-            if value is None:
-                os.environ.pop(name, None)
-            else:
-                os.environ[name] = value
+        with _lock:
+            _depth["count"] -= 1
+            if _depth["count"] == 0 and _depth.get("limits") is not None:
+                _depth["limits"].restore_original_limits()
+                for name, value in _depth.pop("saved").items():
+                    if value is None:
+                        os.environ.pop(name, None)
+                    else:
+                        os.environ[name] = value
+                _depth["limits"] = None
 
 
 def owns_threads(function):

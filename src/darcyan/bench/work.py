@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..api import verification_wanted
 from ..config import DarcyanConfig
-from ..correspond import verification_wanted
 from ..dense import pyfm
 from ..errors import DarcyanError
 from ..eval.metrics import (

@@ -74,8 +74,10 @@ def matching_of_seed(correspondence, rank: int):
     if not 0 <= rank < len(matchings):
         raise DarcyanError(f"seed {rank}: the matching has {len(matchings) - 1} alternatives")
     chosen = matchings[rank]
-    if rank > 0:
-        chosen = dataclasses.replace(chosen, alternatives=tuple(m for m in matchings if m is not chosen))
+    if rank > 0:  # the sparse stage's doubt and margin are the matching's, whichever seed is taken
+        chosen = dataclasses.replace(chosen, alternatives=tuple(m for m in matchings if m is not chosen),
+                                     **{name: getattr(correspondence, name) for name in ("in_doubt", "margin")
+                                        if hasattr(correspondence, name) and hasattr(chosen, name)})
     return chosen
 
 

@@ -48,7 +48,7 @@ class SpectralMatching:
 
 
 def spectral_matching(shape_1, shape_2, config: DenseConfig, samples: tuple, bases: tuple,
-                      fields: tuple = ({}, {}), known: tuple | None = None) -> SpectralMatching | None:
+                      fields: tuple | None = None, known: tuple | None = None) -> SpectralMatching | None:
     """Landmark matches read from the best of the short spectral maps (see the module's text).
 
     Args:
@@ -66,6 +66,7 @@ def spectral_matching(shape_1, shape_2, config: DenseConfig, samples: tuple, bas
     Returns:
         a :class:`SpectralMatching`, or ``None`` when the bases are too small for a start.
     """
+    fields = ({}, {}) if fields is None else fields
     dims = config.start_dimensions
     size = min(config.seed_basis, config.basis_size, bases[0].shape[1], bases[1].shape[1])
     if size < dims + 2:

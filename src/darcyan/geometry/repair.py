@@ -117,7 +117,7 @@ def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairi
     """
     check_mesh(mesh)
     changes: list[str] = []
-    ordinary = repair or not settings.strict  # the ordinary imperfections are repaired unless strict
+    ordinary = not settings.strict  # the ordinary imperfections are repaired unless strict (repair or not)
     if repair:
         before = mesh.n_vertices
         mesh = weld_vertices(mesh, settings.weld_tolerance)
@@ -470,11 +470,11 @@ def _cut_where_orientations_disagree(mesh: Mesh) -> tuple[Mesh, int]:
         repeated = order[1:][directed[order][1:] == directed[order][:-1]]  # the later use of each edge
         keep = np.ones(len(faces), bool)
         keep[np.unique(repeated // 3)] = False
-        dropped += int((~keep).sum())
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", MeshWarning)  # the cut's own slivers: counted as dropped faces
             mesh, _ = split_nonmanifold(Mesh(mesh.vertices, faces[keep], mesh.name, mesh.input_index))
             mesh = _largest_component(mesh)
+        dropped += len(faces) - mesh.n_faces
         mesh, _ = _orient_consistently(mesh)
         if _consistently_oriented(mesh.faces, mesh.n_vertices):
             return mesh, dropped

@@ -20,7 +20,7 @@ from .errors import DarcyanError
 from .geometry.mesh import Mesh
 from .geometry.shape import Shape, prepare_shape
 from .io.cache import ShapeCache
-from .method.pipeline import Correspondence, analyze_shape, describe_shape, describe_shapes, load_shape, match_shapes
+from .method.pipeline import Correspondence, analyze_shape, describe_shapes, load_shape, match_shapes
 from .parallel import owns_threads
 
 VERIFY_CHOICES = ("auto", True, False)
@@ -102,6 +102,11 @@ class Correspondences:
 
     def _write(self, path, form: str) -> str:
         if self.dense and len(self.pairs) > 1:
+            stems = [Path(pair.target).stem for pair in self.pairs]
+            twice = sorted({stem for stem in stems if stems.count(stem) > 1})
+            if path is not None and twice:
+                raise DarcyanError(f"several targets are named {twice[0]!r}: their maps would overwrite each other "
+                                   f"in {path}")
             texts = [self.dense_text(i, form) for i in range(len(self.pairs))]
             if path is not None:
                 folder = Path(path)
@@ -195,20 +200,16 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
     say = progress or (lambda text: None)
     store = ShapeCache() if cache is True else (cache or None)
     inputs = [_input(item) for item in [source, *targets]]
-    descriptions = _describe(inputs, config, repair, store, jobs)
+    # A mesh given in memory is prepared once, for its description and everything after.
+    prepared: dict = {i: (item if isinstance(item, Shape) else prepare_shape(item, config, repair))
+                      for i, item in enumerate(inputs) if isinstance(item, (Mesh, Shape))}
+    descriptions = _describe(inputs, prepared, config, repair, store, jobs)
     say(f"described {len(descriptions)} shapes")
     names = [_name(item) for item in inputs]
-    prepared: dict = {}
 
     def shape_of(index: int) -> Shape:
-        if index not in prepared:
-            item = inputs[index]
-            if isinstance(item, Shape):
-                prepared[index] = item
-            elif isinstance(item, Mesh):
-                prepared[index] = prepare_shape(item, config, repair)
-            else:
-                prepared[index] = load_shape(item, config, repair, warn=False)
+        if index not in prepared:  # a file, prepared as its description was (its notes said once)
+            prepared[index] = load_shape(inputs[index], config, repair, warn=False)
         return prepared[index]
 
     pairs = []
@@ -265,14 +266,13 @@ def _name(item) -> str:
     return str(item) if isinstance(item, (str, os.PathLike)) else item.name
 
 
-def _describe(inputs: list, config: DarcyanConfig, repair: bool, store, jobs: int) -> list:
-    """The descriptions of ``inputs``: the files together (cache, workers), the others one by one."""
+def _describe(inputs: list, prepared: dict, config: DarcyanConfig, repair: bool, store, jobs: int) -> list:
+    """The descriptions of ``inputs``: the files together (cache, workers), the shapes given in
+    memory from their ``prepared`` shapes."""
     files = [i for i, item in enumerate(inputs) if isinstance(item, (str, os.PathLike))]
     described = dict(zip(files, describe_shapes([inputs[i] for i in files], config, repair, store, jobs)))
-    for i, item in enumerate(inputs):
-        if i not in described:
-            described[i] = analyze_shape(item, config).description if isinstance(item, Shape) else \
-                describe_shape(item, config, repair)
+    for i, shape in prepared.items():
+        described[i] = analyze_shape(shape, config).description
     return [described[i] for i in range(len(inputs))]
 
 
