@@ -74,6 +74,16 @@ def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float
     return np.array(sorted(best[0]), dtype=np.int64)
 
 
+def distance_fields(shape, known: dict, vertices) -> np.ndarray:
+    """``(n, len(vertices))`` the fast-marching distances from each of ``vertices`` (prepared
+    numbering), read from ``known`` (``{vertex: (n,) distance}``) and kept there: a vertex's field
+    is computed once per pair, whichever seed or start asks for it."""
+    for v in vertices:
+        if int(v) not in known:
+            known[int(v)] = shape.solver.distance(int(v))
+    return np.stack([known[int(v)] for v in vertices], axis=1) if len(vertices) else np.zeros((shape.mesh.n_vertices, 0))
+
+
 def _landmark_pairs(shape_1, shape_2, correspondence, config: DenseConfig, fields: tuple | None = None):
     """Landmark pairs in local numbering and their distance fields ``(n, k)`` on both shapes
     (``fields``: one ``{vertex: (n,) distance}`` per shape, read and filled in)."""
@@ -84,13 +94,7 @@ def _landmark_pairs(shape_1, shape_2, correspondence, config: DenseConfig, field
     ok = (src >= 0) & (tgt >= 0)
     src, tgt, cost = src[ok], tgt[ok], cost[ok]
 
-    def distances(shape, known, vertices):
-        for v in vertices:
-            if int(v) not in known:
-                known[int(v)] = shape.solver.distance(int(v))
-        return np.stack([known[int(v)] for v in vertices], axis=1) if len(vertices) else np.zeros((shape.mesh.n_vertices, 0))
-
-    fields_1, fields_2 = distances(shape_1, fields[0], src), distances(shape_2, fields[1], tgt)
+    fields_1, fields_2 = distance_fields(shape_1, fields[0], src), distance_fields(shape_2, fields[1], tgt)
     if config.landmarks == "consistent" and len(src):
         finite = np.where(np.isfinite(cost), cost, 0.0)
         scale = finite.max() if finite.max() > 0 else 1.0

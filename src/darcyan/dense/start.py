@@ -25,7 +25,7 @@ import numpy as np
 from ..geometry.knn import nearest_rows
 from ..geometry.sampling import farthest_point_vertices
 from .config import DenseConfig
-from .landmarks import orientation_coordinates
+from .landmarks import distance_fields, orientation_coordinates
 from .signatures import point_signature, signature_coordinates, signature_score
 from .zoomout import map_embeddings, seed_subset, zoomout
 
@@ -93,12 +93,12 @@ def spectral_matching(shape_1, shape_2, config: DenseConfig, samples: tuple, bas
     start = int(np.argmax((shape_1.mesh.vertices[p_1] ** 2).sum(axis=1)))
     picks = farthest_point_vertices(shape_1.mesh.vertices[p_1], config.start_landmarks, start)
     source = p_1[picks]
-    distances_1 = _distances(shape_1, fields[0], source)
+    distances_1 = distance_fields(shape_1, fields[0], source)
     turns_1 = orientation_coordinates(shape_1, distances_1)[p_1]
     best = None
     for score, name, map_12 in tried[:config.start_checked]:
         target = p_2[map_12[picks]]
-        distances_2 = _distances(shape_2, fields[1], target)
+        distances_2 = distance_fields(shape_2, fields[1], target)
         orientation = map_orientation(turns_1, orientation_coordinates(shape_2, distances_2)[p_2][map_12])
         candidate = (orientation > 0, -score, orientation, name, target)
         if best is None or candidate[:2] > best[:2]:
@@ -157,11 +157,3 @@ def map_orientation(turns_1: np.ndarray, turns_at_images: np.ndarray) -> float:
 def _beside(spectral: np.ndarray, landmark: np.ndarray | None, config: DenseConfig) -> np.ndarray:
     """Spectral coordinates beside the weighed landmark distances (when there are any)."""
     return spectral if landmark is None else np.hstack([spectral, config.landmark_weight * landmark])
-
-
-def _distances(shape, known: dict, vertices: np.ndarray) -> np.ndarray:
-    """``(n, len(vertices))`` geodesic distances from each of ``vertices`` (read from and kept in ``known``)."""
-    for v in vertices:
-        if int(v) not in known:
-            known[int(v)] = shape.solver.distance(int(v))
-    return np.stack([known[int(v)] for v in vertices], axis=1)
