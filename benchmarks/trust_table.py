@@ -56,10 +56,15 @@ def main(argv=None) -> int:
     pooled = []
     columns = ("pairs", "no map", "collapsed", "wholly wrong", "within", "mean x100", "trusted right",
                "trusted collapsed", "untrusted right", "untrusted collapsed")
+    try:  # a missing or unreadable folder: one error line, before any table
+        runs = {folder: dense_records(folder) for folder in args.folders}
+    except (OSError, ValueError) as exc:
+        print(f"trust_table.py: error: {exc}", file=sys.stderr)
+        return 2
     print("| set | " + " | ".join(columns) + " | starts | worst |")
     print("| --- " * (len(columns) + 3) + "|")
     for folder in args.folders:
-        records = dense_records(folder)
+        records = runs[folder]
         pooled += records
         row = summary(records, args.right)
         print(f"| {folder.name} | " + " | ".join(_cell(row[c]) for c in columns)

@@ -110,13 +110,13 @@ class Correspondences:
             texts = [self.dense_text(i, form) for i in range(len(self.pairs))]
             if path is not None:
                 folder = Path(path)
-                _write_file(None, folder, mkdir=True)
+                write_file(None, folder, mkdir=True)
                 for pair, text in zip(self.pairs, texts):
-                    _write_file(text, folder / f"{Path(pair.target).stem}.{form}")
+                    write_file(text, folder / f"{Path(pair.target).stem}.{form}")
             return texts[0]
         text = self.text(form)
         if path is not None:
-            _write_file(text, Path(path))
+            write_file(text, Path(path))
         return text
 
 
@@ -289,7 +289,9 @@ def _verified(source, target, matches, shapes, config, dense_config, repair, sto
     return checked, {**about, "cached": False}
 
 
-def _write_file(text: str | None, path: Path, mkdir: bool = False) -> None:
+def write_file(text: str | None, path: Path, mkdir: bool = False) -> None:
+    """Write ``text`` to ``path`` (or, with ``mkdir``, make the folder ``path``); a failure is one
+    :class:`DarcyanError` naming the path (what ``darcyan`` writes, it writes through here)."""
     try:
         if mkdir:
             path.mkdir(parents=True, exist_ok=True)

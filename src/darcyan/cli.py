@@ -99,10 +99,9 @@ def _write_text(text: str, output: str | None) -> None:
     if output is None or output == "-":
         sys.stdout.write(text)
         return
-    try:
-        Path(output).write_text(text)
-    except OSError as exc:
-        raise DarcyanError(f"{output}: cannot write ({exc.strerror or exc})") from None
+    from .api import write_file
+
+    write_file(text, Path(output))
 
 
 def _note_changes(shape) -> None:
