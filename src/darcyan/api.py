@@ -11,16 +11,18 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 from .config import DarcyanConfig
 from .dense.config import DenseConfig
-from .dense.maps import DENSE_FAILURES, DenseMap, dense_map, dense_map_to_csv
+from .dense.maps import DENSE_FAILURES, DenseMap, dense_map, dense_map_to_csv, shape_operators
 from .errors import DarcyanError
 from .geometry.mesh import Mesh
 from .geometry.shape import Shape, prepare_shape
 from .io.cache import ShapeCache
-from .method.pipeline import Correspondence, analyze_shape, describe_shapes, load_shape, match_shapes
+from .method.pipeline import (Correspondence, analyze_shape, describe_and_prepare, describe_shapes, load_shape,
+                              match_shapes)
 from .parallel import owns_threads
 
 VERIFY_CHOICES = ("auto", True, False)
@@ -203,7 +205,7 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
     # A mesh given in memory is prepared once, for its description and everything after.
     prepared: dict = {i: (item if isinstance(item, Shape) else prepare_shape(item, config, repair))
                       for i, item in enumerate(inputs) if isinstance(item, (Mesh, Shape))}
-    descriptions = _describe(inputs, prepared, config, repair, store, jobs)
+    descriptions = _describe(inputs, prepared, config, repair, store, jobs, dense_config if dense else None)
     say(f"described {len(descriptions)} shapes")
     names = [_name(item) for item in inputs]
 
@@ -266,13 +268,23 @@ def _name(item) -> str:
     return str(item) if isinstance(item, (str, os.PathLike)) else item.name
 
 
-def _describe(inputs: list, prepared: dict, config: DarcyanConfig, repair: bool, store, jobs: int) -> list:
+def _describe(inputs: list, prepared: dict, config: DarcyanConfig, repair: bool, store, jobs: int,
+              dense_config: DenseConfig | None = None) -> list:
     """The descriptions of ``inputs``: the files together (cache, workers), the shapes given in
-    memory from their ``prepared`` shapes."""
+    memory from their ``prepared`` shapes. With ``dense_config`` (a dense map to follow), the
+    files' shapes are prepared beside their descriptions, with what the map needs of each alone
+    (:func:`~darcyan.dense.maps.shape_operators`), and join ``prepared``."""
     files = [i for i, item in enumerate(inputs) if isinstance(item, (str, os.PathLike))]
-    described = dict(zip(files, describe_shapes([inputs[i] for i in files], config, repair, store, jobs)))
-    for i, shape in prepared.items():
+    sources = [inputs[i] for i in files]
+    described = {}
+    for i, shape in prepared.items():  # given in memory
         described[i] = analyze_shape(shape, config).description
+    if dense_config is not None and files:
+        both = describe_and_prepare(sources, config, repair, store, jobs, partial(shape_operators, config=dense_config))
+        described.update({i: description for i, (description, _) in zip(files, both)})
+        prepared.update({i: shape for i, (_, shape) in zip(files, both)})
+    else:
+        described.update(zip(files, describe_shapes(sources, config, repair, store, jobs)))
     return [described[i] for i in range(len(inputs))]
 
 

@@ -8,6 +8,10 @@ neighbour, 4.5 s with one thread. So the library's entry points (:func:`owns_thr
 :func:`get_threads` threads, 1 by default; :func:`set_threads` (``darcyan.set_threads``), the
 environment variable ``DARCYAN_THREADS`` or ``darcyan --threads N`` change it, 0 leaves the
 libraries' own pools as they are.
+
+darcyan's own loops that split into independent blocks (the nearest-neighbour searches of dense
+maps) run on :func:`own_threads` Python threads, each with its BLAS thread: numpy releases the
+interpreter lock in its matrix products, and threads that wait do not spin as a BLAS pool's do.
 """
 
 from __future__ import annotations
@@ -22,6 +26,10 @@ from .errors import DarcyanError
 DEFAULT_THREADS = 1
 _threads = {"count": None}  # set_threads's value; None: DARCYAN_THREADS, else DEFAULT_THREADS
 _lock = threading.Lock()
+_in_worker = {"value": False}  # True in a worker process of process_map: the workers fill the cores
+# darcyan's own threads at most: the blocked searches gain little beyond (memory bandwidth).
+MAX_OWN_THREADS = 8
+_pool = {"pid": None, "threads": 0, "executor": None}
 _depth = {"count": 0, "limits": None}  # entry points running in the process; the limit they set
 
 # Set to 1 in every worker: libraries that start a thread pool later read them.
@@ -55,9 +63,45 @@ def process_map(function, tasks: list, jobs: int, ordered: bool = False):
 def _one_thread() -> None:
     from threadpoolctl import threadpool_limits
 
+    _in_worker["value"] = True
     for name in THREAD_VARIABLES:
         os.environ[name] = "1"
     threadpool_limits(1)
+
+
+def own_threads() -> int:
+    """How many threads darcyan's own block-wise loops use (:func:`map_blocks`): the cores this
+    process may run on (at most :data:`MAX_OWN_THREADS`), 1 inside a worker of
+    :func:`process_map`, whose workers already fill the cores."""
+    if _in_worker["value"]:
+        return 1
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, MAX_OWN_THREADS))
+
+
+def map_blocks(function, blocks: list) -> list:
+    """``[function(block) for block in blocks]``, computed on up to :func:`own_threads` threads
+    (in order; each block's result is the same bits whichever thread computes it)."""
+    threads = min(own_threads(), len(blocks))
+    if threads <= 1:
+        return [function(block) for block in blocks]
+    return list(_thread_pool(own_threads()).map(function, blocks))
+
+
+def _thread_pool(threads: int):
+    """The process's pool of ``threads`` threads for :func:`map_blocks`, made on first use (and
+    anew in a forked child, which has none of its parent's threads): starting threads for every
+    search cost more than a small search."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    with _lock:
+        if _pool["pid"] != os.getpid() or _pool["threads"] != threads:
+            _pool.update(pid=os.getpid(), threads=threads,
+                         executor=ThreadPoolExecutor(threads, thread_name_prefix="darcyan"))
+        return _pool["executor"]
 
 
 def get_threads() -> int:

@@ -37,8 +37,8 @@ from .alignment import aligned_map
 from .config import DenseConfig
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
 from .seeds import check_of_seeds, choose_seed
-from .signatures import signature_coordinates, signature_turn_coordinates
-from .zoomout import consensus_map, dense_eigenvalues, read_out_map, zoomout, zoomout_samples
+from .signatures import point_signature, signature_coordinates, signature_turn_coordinates
+from .zoomout import consensus_map, dense_eigenvalues, dense_spectrum, read_out_map, zoomout, zoomout_samples
 
 UNMAPPED = -1  # source vertices the analysis left out (outside the largest component)
 # What a dense map may raise on a pair it cannot map (too few consistent landmarks, an eigensolver
@@ -132,7 +132,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             c_12, c_21 = zoomout(basis_1[sample_1], basis_2[sample_2], first_12, first_21, config,
                                  coords_1[sample_1], coords_2[sample_2], coarse_1, coarse_2, *turns, *values)
             maps.append(read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2,
-                                     steady_1, steady_2))
+                                     steady_1, steady_2, sample_1, mesh_1.vertices))
         local = consensus_map(mesh_2.vertices, maps)
         timings["zoomout"] = time.perf_counter() - t
         if config.alignment_rounds > 0:
@@ -146,6 +146,18 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     check.update(check_of_seeds(seed, seeds, config.seed_margin))
     check["trusted"] = trusted(check, correspondence, config)
     return DenseMap(target, landmarks, timings, check)
+
+
+def shape_operators(shape, config: DenseConfig = DenseConfig()) -> None:
+    """Build on ``shape`` (a prepared :class:`~darcyan.geometry.shape.Shape`) what a dense map
+    with ``config`` needs of it alone, and keep it there: its basis and eigenvalues
+    (:func:`~darcyan.dense.zoomout.dense_spectrum`) and its point signature. A shape made ready
+    in a worker process carries them back (:func:`darcyan.method.pipeline.describe_and_prepare`),
+    so that two shapes' eigenproblems are solved at once."""
+    if config.method == "zoomout" or config.candidates > 1:
+        dense_spectrum(shape, config)
+    if config.signature_weight > 0 or config.signature_turns > 0 or config.candidates > 1:
+        point_signature(shape, config)
 
 
 def trusted(check: dict, correspondence, config: DenseConfig) -> bool:

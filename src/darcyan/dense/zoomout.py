@@ -23,6 +23,7 @@ import dataclasses
 import numpy as np
 
 from ..geometry.knn import KDTREE_MAX_DIM, nearest_rows, nearest_rows_near
+from ..parallel import own_threads
 from ..geometry.sampling import farthest_point_vertices, sample_vertices
 from .config import DenseConfig
 
@@ -171,25 +172,56 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
     holds near isometry, where that block carries the map, not an exact condition).
     """
     p, k = c_ab.shape
-    queries, references = [b_a[:, :p] @ c_ab], [b_b[:, :k]]
     w1, w2 = config.bijectivity ** 2, config.orthogonality ** 2
-    if w1 + w2 > 0:
-        # Both terms compare b_a[i] with a row of b: w1 |a - x_j|^2 + w2 |a - y_j|^2 equals
-        # (w1 + w2) |a - m_j|^2 + w1 w2 / (w1 + w2) |x_j - y_j|^2 with m_j their weighted mean:
-        # one block of k columns and one column carrying the j-only part, not two blocks.
-        x, y = b_b[:, :p] @ c_ba, b_b[:, :k] @ c_ab[:k].T
-        total = w1 + w2
-        queries += [np.sqrt(total) * b_a[:, :k], np.zeros((len(b_a), 1))]
-        references += [(w1 * x + w2 * y) / np.sqrt(total),
-                       np.sqrt(w1 * w2 / total) * np.linalg.norm(x - y, axis=1)[:, None]]
-    if config.landmark_weight > 0 and f_a is not None:
-        queries.append(config.landmark_weight * f_a)
-        references.append(config.landmark_weight * f_b)
-    if g_a is not None:
-        queries.append(g_a)
-        references.append(g_b)
-    return (np.hstack([np.asarray(part, dtype) for part in queries]),
-            np.hstack([np.asarray(part, dtype) for part in references]))
+    total = w1 + w2
+    landmarks = config.landmark_weight > 0 and f_a is not None
+
+    def query_rows(rows: slice) -> list:
+        parts = [b_a[rows, :p] @ c_ab]
+        if total > 0:
+            parts += [np.sqrt(total) * b_a[rows, :k], np.zeros((len(b_a[rows]), 1))]
+        if landmarks:
+            parts.append(config.landmark_weight * f_a[rows])
+        if g_a is not None:
+            parts.append(g_a[rows])
+        return parts
+
+    def reference_rows(rows: slice) -> list:
+        parts = [b_b[rows, :k]]
+        if total > 0:
+            # Both terms compare b_a[i] with a row of b: w1 |a - x_j|^2 + w2 |a - y_j|^2 equals
+            # (w1 + w2) |a - m_j|^2 + w1 w2 / (w1 + w2) |x_j - y_j|^2 with m_j their weighted mean:
+            # one block of k columns and one column carrying the j-only part, not two blocks.
+            x, y = b_b[rows, :p] @ c_ba, b_b[rows, :k] @ c_ab[:k].T
+            parts += [(w1 * x + w2 * y) / np.sqrt(total), np.sqrt(w1 * w2 / total) * np.linalg.norm(x - y, axis=1)[:, None]]
+        if landmarks:
+            parts.append(config.landmark_weight * f_b[rows])
+        if g_b is not None:
+            parts.append(g_b[rows])
+        return parts
+
+    return _rows_by_blocks(query_rows, len(b_a), dtype), _rows_by_blocks(reference_rows, len(b_b), dtype)
+
+
+# Rows of an embedding computed at once: the double-precision terms of a block, not of a whole
+# large mesh, are held beside the result (on a 210k-vertex mesh, 1 GB less at the peak).
+EMBEDDING_BLOCK_ROWS = 16384
+
+
+def _rows_by_blocks(parts_of, n: int, dtype) -> np.ndarray:
+    """``(n, d)`` of ``dtype``: the columns ``parts_of(rows)`` gives for each block of rows (each
+    term computed in double precision, then converted), side by side."""
+    out = None
+    for first in range(0, max(n, 1), EMBEDDING_BLOCK_ROWS):
+        rows = slice(first, min(first + EMBEDDING_BLOCK_ROWS, n))
+        parts = parts_of(rows)
+        if out is None:
+            out = np.empty((n, sum(part.shape[1] for part in parts)), dtype)
+        column = 0
+        for part in parts:
+            out[rows, column:column + part.shape[1]] = part
+            column += part.shape[1]
+    return out
 
 
 def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21: np.ndarray,
@@ -252,20 +284,36 @@ def _joined(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
 def read_out_map(shape_2, basis_1: np.ndarray, basis_2: np.ndarray, c_12: np.ndarray, c_21: np.ndarray,
                  config: DenseConfig, coords_1: np.ndarray, coords_2: np.ndarray,
                  sample_2: np.ndarray, steady_1: np.ndarray | None = None,
-                 steady_2: np.ndarray | None = None) -> np.ndarray:
+                 steady_2: np.ndarray | None = None, sample_1: np.ndarray | None = None,
+                 positions_1: np.ndarray | None = None) -> np.ndarray:
     """``(n1,)`` for every source vertex a target vertex (prepared numbering): the nearest rows of
     the :func:`map_embeddings` of functional maps ``c_12, c_21 (p, k)`` on the bases ``(n_i,
     >= p)``, the landmark coordinates ``(n_i, c)`` and, as they are, ``steady_i (n_i, t)`` (the
     weighted signature turns, when given); a target mesh of more than
     ``config.local_search_above`` vertices is searched near each image's nearest ZoomOut sample
-    (``sample_2``, see :func:`darcyan.geometry.knn.nearest_rows_near`)."""
+    (``sample_2``, see :func:`darcyan.geometry.knn.nearest_rows_near`); with the source's
+    ZoomOut samples ``sample_1`` and vertex positions ``positions_1 (n1, 3)``, that sample is
+    sought near the image of the source sample nearest each vertex."""
     # Single precision, as the brute-force search reads them (half the memory of a large mesh's);
     # with k <= KDTREE_MAX_DIM the rows may be few enough for a k-d tree, which reads double.
     dtype = np.float32 if c_12.shape[1] > KDTREE_MAX_DIM else np.float64
     q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, steady_1, steady_2, dtype=dtype)
     mesh_2 = shape_2.mesh
     if mesh_2.n_vertices > config.local_search_above and len(sample_2) < mesh_2.n_vertices:
-        return nearest_rows_near(r, q, mesh_2.vertices, sample_2, config.local_search_reach)
+        # The search's cells: as many as ZoomOut's samples, drawn over the vertices (not the
+        # area), so that each holds as many vertices: cells of equal area hold many more where a
+        # mesh is dense (hands, faces), and dense regions map onto dense regions, so the search's
+        # cost grew with the square of the density (6 s of 7 on a 210k mesh of TOSCA's david).
+        cells = np.sort(sample_vertices(mesh_2.n_vertices, len(sample_2), np.random.default_rng(config.seed)))
+        guess = None
+        if sample_1 is not None:
+            # Each vertex's image is sought near that of the source sample nearest to it (the
+            # samples' own map: a search among the samples alone), not among all cells.
+            from scipy.spatial import cKDTree
+
+            images = nearest_rows(r[cells], q[sample_1])
+            guess = images[cKDTree(positions_1[sample_1]).query(positions_1, workers=own_threads())[1]]
+        return nearest_rows_near(r, q, mesh_2.vertices, cells, config.local_search_reach, guess)
     return nearest_rows(r, q)
 
 

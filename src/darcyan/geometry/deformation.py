@@ -10,7 +10,7 @@ weights, clamped at 0; ``R_i`` the best rotation of vertex i's one-ring;
 balance does not depend on the mesh's scale or resolution: the mesh follows the targets on
 scales beyond about ``length`` (in sqrt(area) units) and keeps its own shape below it, bends
 included, since each one-ring may turn. It is minimized by local-global iterations: each one-ring's
-rotation from an SVD, then one sparse solve for the positions, whose matrix is factorized once.
+rotation from a 3x3 SVD (libigl), then one sparse solve for the positions, whose matrix is factorized once.
 
 libigl's ``arap`` holds chosen vertices fixed (hard constraints); a dense map's images are each
 a vertex or two off, so here every vertex is pulled towards its target softly instead.
@@ -75,18 +75,21 @@ class ArapDeformation:
         return positions
 
     def _rotations(self, positions: np.ndarray) -> np.ndarray:
-        """``(n, 3, 3)`` each one-ring's rotation best taking its rest edges to its current ones."""
+        """``(n, 3, 3)`` each one-ring's rotation best taking its rest edges to its current ones:
+        ``R = V U^T`` for the covariance ``S = sum_j w_ij (x_i - x_j) (y_i - y_j)^T = U D V^T``
+        (a proper rotation: the sign of V's last column turned where that would be a reflection),
+        by libigl's ``fit_rotations`` (a fixed-size 3x3 SVD; 2.5x numpy's batched SVD)."""
+        import igl
+
         n = len(positions)
         current = positions[self._rows] - positions[self._cols]
-        covariance = np.empty((n, 3, 3))
+        # stacked as libigl reads them: row a * n + i is the a-th row of vertex i's matrix
+        stacked = np.empty((3, n, 3))
         for a in range(3):
             for b in range(3):
-                covariance[:, a, b] = np.bincount(self._rows, self._edges[:, a] * current[:, b], minlength=n)
-        u, _, vt = np.linalg.svd(covariance)
-        # R = V U^T, with the sign of V's last column turned where that would be a reflection
-        flip = np.linalg.det(np.matmul(vt.transpose(0, 2, 1), u.transpose(0, 2, 1))) < 0
-        vt[flip, 2, :] *= -1
-        return np.matmul(vt.transpose(0, 2, 1), u.transpose(0, 2, 1))
+                stacked[a, :, b] = np.bincount(self._rows, self._edges[:, a] * current[:, b], minlength=n)
+        # libigl gives the rotation nearest S (3 x 3n, one per column block); R is its transpose
+        return igl.fit_rotations(stacked.reshape(3 * n, 3), False).reshape(3, n, 3).transpose(1, 0, 2)
 
     def _rotated_edges(self, rotations: np.ndarray) -> np.ndarray:
         """``(n, 3)``: ``sum_j w_ij (R_i + R_j) (x_i - x_j) / 2``, the global step's right side."""

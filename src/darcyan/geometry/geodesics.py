@@ -36,6 +36,10 @@ class GeodesicSolver:
         self._tracer = None
         self._tree = None
 
+    def __getstate__(self) -> dict:
+        # The native solvers do not pickle; a copy sent to another process builds its own on use.
+        return {**self.__dict__, "_fmm_solver": None, "_tracer": None, "_tree": None}
+
     @property
     def _fmm(self):
         if self._fmm_solver is None:

@@ -83,29 +83,35 @@ def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
     """``(q,) int64``: for each row of ``queries (q, d)``, the nearest row of ``reference (n, d)``.
 
     A k-d tree in few dimensions; in many, brute force in single precision by blocks of queries
-    (memory ``block x n`` beside the single-precision copies, never ``q x n``; single-precision
-    inputs are not copied).
+    (memory ``block x n`` per thread beside the single-precision copies, never ``q x n``;
+    single-precision inputs are not copied), the blocks on :func:`~darcyan.parallel.own_threads`
+    threads.
     """
+    from ..parallel import map_blocks, own_threads
+
     if np.shape(reference)[1] <= KDTREE_MAX_DIM:
         from scipy.spatial import cKDTree
 
         reference = np.ascontiguousarray(reference, dtype=np.float64)
-        return cKDTree(reference).query(np.ascontiguousarray(queries, dtype=np.float64))[1].astype(np.int64)
+        queries = np.ascontiguousarray(queries, dtype=np.float64)
+        return cKDTree(reference).query(queries, workers=own_threads())[1].astype(np.int64)
     reference = np.ascontiguousarray(reference, dtype=np.float32)
     queries = np.ascontiguousarray(queries, dtype=np.float32)
     # One matrix product per block gives |r|^2 - 2 q.r directly: [-2 q, 1] @ [r, |r|^2]^T.
     right = np.vstack([reference.T, np.einsum("ij,ij->i", reference, reference)[None]])
-    block = np.empty((min(NN_BLOCK_ROWS, len(queries)), len(reference)), np.float32)  # reused
     out = np.empty(len(queries), dtype=np.int64)
-    for start in range(0, len(queries), NN_BLOCK_ROWS):
+
+    def search(start: int) -> None:  # the same blocks whatever the threads: the same bits
         rows = queries[start:start + NN_BLOCK_ROWS]
         left = np.hstack([-2.0 * rows, np.ones((len(rows), 1), np.float32)])
-        out[start:start + len(rows)] = np.matmul(left, right, out=block[:len(rows)]).argmin(axis=1)
+        out[start:start + len(rows)] = np.matmul(left, right).argmin(axis=1)
+
+    map_blocks(search, list(range(0, len(queries), NN_BLOCK_ROWS)))
     return out
 
 
 def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.ndarray, coarse: np.ndarray,
-                      reach: int) -> np.ndarray:
+                      reach: int, guess: np.ndarray | None = None) -> np.ndarray:
     """``(q,) int64``: for each row of ``queries (q, d)``, the nearest row of ``reference (n, d)``
     among those lying near its nearest *coarse* row: a coarse-to-fine :func:`nearest_rows` for
     embeddings of surface points, in ``O(q (m + reach n / m) d)`` instead of ``O(q n d)``.
@@ -117,8 +123,15 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
     a smooth embedding of a sphere with 16 cells it finds the row of the full search for 99.8%
     of the queries, and on a 52k-vertex dense map the map's error is that of the full search to
     within 2% (``docs/decisions/``).
+
+    ``guess (q,)``, when given: for each query, the index into ``coarse`` of a sample it is
+    expected to lie near (e.g. the image of the source sample nearest to it in space). Its
+    nearest sample is then sought only among the ``reach`` samples nearest the guess (in space),
+    not among all m: ``O(q reach d)`` instead of ``O(q m d)``, the larger cost on a large mesh.
     """
     from scipy.spatial import cKDTree
+
+    from ..parallel import map_blocks
 
     reference = np.ascontiguousarray(reference, dtype=np.float32)
     queries = np.ascontiguousarray(queries, dtype=np.float32)
@@ -128,12 +141,13 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
     around = tree.query(positions[coarse], k=min(reach, len(coarse)))[1].reshape(len(coarse), -1)
     by_cell = np.argsort(cell, kind="stable")
     bounds = np.searchsorted(cell[by_cell], np.arange(len(coarse) + 1))
-    nearest_sample = nearest_rows(reference[coarse], queries)
+    nearest_sample = nearest_rows(reference[coarse], queries) if guess is None else \
+        _nearest_around(reference[coarse], queries, np.asarray(guess, dtype=np.int64), around)
     ref_sq = np.einsum("ij,ij->i", reference, reference)
     out = np.empty(len(queries), dtype=np.int64)
     by_query = np.argsort(nearest_sample, kind="stable")
     starts = np.searchsorted(nearest_sample[by_query], np.arange(len(coarse) + 1))
-    for s in np.flatnonzero(np.diff(starts)):
+    def search(s: int) -> None:  # the queries nearest sample s; cells apart, on any thread
         members = by_query[starts[s]:starts[s + 1]]
         candidates = np.concatenate([by_cell[bounds[c]:bounds[c + 1]] for c in around[s]])
         near, near_sq = reference[candidates], ref_sq[candidates]
@@ -146,4 +160,27 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
             rows = members[start:end]
             scores = near_sq[None, :] - 2.0 * (queries[rows] @ near.T)
             out[rows] = candidates[np.argmin(scores, axis=1)]
+
+    map_blocks(search, np.flatnonzero(np.diff(starts)).tolist())
+    return out
+
+
+def _nearest_around(samples: np.ndarray, queries: np.ndarray, guess: np.ndarray, around: np.ndarray) -> np.ndarray:
+    """``(q,)`` for each query the nearest of the rows of ``samples (m, d)`` listed in
+    ``around[guess[i]]`` (``around (m, r)``: each sample's neighbours, itself first), by groups of
+    queries sharing a guess."""
+    from ..parallel import map_blocks
+
+    out = np.empty(len(queries), dtype=np.int64)
+    order = np.argsort(guess, kind="stable")
+    starts = np.searchsorted(guess[order], np.arange(len(samples) + 1))
+    samples_sq = np.einsum("ij,ij->i", samples, samples)
+
+    def search(g: int) -> None:
+        members = order[starts[g]:starts[g + 1]]
+        near = around[g]
+        scores = samples_sq[near][None, :] - 2.0 * (queries[members] @ samples[near].T)
+        out[members] = near[np.argmin(scores, axis=1)]
+
+    map_blocks(search, np.flatnonzero(np.diff(starts)).tolist())
     return out

@@ -27,6 +27,10 @@ from .repair import prepare_mesh
 from .spectral import SHIFT, Spectrum, laplace_beltrami_spectrum
 
 
+# What a pickled Shape keeps of what it built (beside derived arrays): what costs time to make.
+PORTABLE_MEMO = ("curvatures", "spectrum", "proxy", "proxy spectrum")
+
+
 @dataclass(frozen=True, eq=False)
 class Shape:
     """A mesh prepared for analysis, and the operators built on it.
@@ -116,7 +120,8 @@ class Shape:
             return self.spectrum(k, tol, shift)
 
         def interpolated():
-            coarse = laplace_beltrami_spectrum(proxy.mesh, min(k, proxy.mesh.n_vertices - 1), tol=tol, shift=shift)
+            coarse = self._once(("proxy spectrum", k, proxy_vertices, tol, shift), lambda: laplace_beltrami_spectrum(
+                proxy.mesh, min(k, proxy.mesh.n_vertices - 1), tol=tol, shift=shift))
             return Spectrum(coarse.values, proxy.to_full(coarse.vectors), self.vertex_areas)
 
         return self._once(("proxy basis", k, proxy_vertices, tol, shift), interpolated)
@@ -132,6 +137,18 @@ class Shape:
         """``compute()``, once per shape and ``key``: what a higher layer derives from the shape
         alone (e.g. the dense maps' point signature) is kept with it like its own operators."""
         return self._once(("derived",) + tuple(key), compute)
+
+    def __getstate__(self) -> dict:
+        """What a copy sent to another process carries: the mesh and what was built on it, but
+        not what is quickly rebuilt from what it carries and large (a proxy's basis interpolated
+        to every vertex) or tied to this process (a factorization's solve; the geodesic solver's
+        native objects, see :class:`~darcyan.geometry.geodesics.GeodesicSolver`)."""
+        memo = {key: value for key, value in self._memo.items()
+                if key[0] in PORTABLE_MEMO or (key[0] == "derived" and isinstance(value, np.ndarray))}
+        return {**self.__dict__, "_memo": memo}
+
+    def __setstate__(self, state: dict) -> None:
+        object.__setattr__(self, "__dict__", state)  # frozen: no __setattr__
 
     def _once(self, key: tuple, compute):
         if key not in self._memo:

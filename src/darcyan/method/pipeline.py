@@ -349,6 +349,53 @@ def describe_shapes(sources: list, config: DarcyanConfig = DarcyanConfig(), repa
     return results
 
 
+@owns_threads
+def describe_and_prepare(sources: list, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
+                         cache: ShapeCache | None = None, jobs: int = 1, extra=None) -> list:
+    """``[(description, shape)]``: for each file of ``sources`` its :func:`describe_shape`
+    description (from ``cache`` when there) and its prepared :class:`~darcyan.geometry.shape.Shape`
+    (as :func:`load_shape` makes it), on which ``extra(shape)``, when given, has been called:
+    what it builds on the shape (e.g. a dense map's basis) is kept with it. With ``jobs > 1``
+    the files are prepared, described and extended at once in up to ``jobs`` worker processes,
+    and each shape comes back with what was built on it
+    (:meth:`~darcyan.geometry.shape.Shape.__getstate__`). ``extra`` must be picklable then (a
+    module-level function or a ``functools.partial`` of one)."""
+    paths = [Path(s) for s in sources]
+    keys = [_cache_key(cache, p, config, repair) for p in paths]
+    results = [_cached(cache, k, p) for k, p in zip(keys, paths)]
+    tasks = [(path, config, repair, described is None, extra) for path, described in zip(paths, results)]
+    if jobs > 1 and len(paths) > 1:
+        import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the workers fork)
+
+        made = list(process_map(_prepared, tasks, jobs, ordered=True))
+    else:
+        made = [_prepared(task) for task in tasks]
+    out = []
+    for i, (arrays, said, shape) in enumerate(made):
+        if results[i] is None:
+            for message in said:
+                warnings.warn(message, MeshWarning, stacklevel=2)
+            if cache is not None:
+                cache.save(keys[i], {**arrays, "warnings": np.array(said, dtype=str)})
+            results[i] = _from_arrays(paths[i], arrays)
+        out.append((results[i], shape))
+    return out
+
+
+def _prepared(task: tuple) -> tuple:
+    """``(arrays, warnings, shape)`` of :func:`describe_and_prepare` for one file (``arrays``:
+    ``None`` when its description was not asked for); in a worker process or not."""
+    path, config, repair, describe, extra = task
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", MeshWarning)
+        shape = prepare_shape(load_mesh(path), config, repair)
+        arrays = analyze_shape(shape, config).description.arrays() if describe else None
+    said = [str(w.message) for w in caught if issubclass(w.category, MeshWarning)]
+    if extra is not None:
+        extra(shape)
+    return arrays, said, shape
+
+
 def _describe_arrays(task: tuple) -> tuple:
     """In a worker process: the cacheable arrays of one file and the mesh warnings it raised."""
     path, config, repair = task
