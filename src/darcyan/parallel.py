@@ -45,12 +45,9 @@ def process_map(function, tasks: list, jobs: int, ordered: bool = False):
     the cores, and a forked worker keeps the parent's thread pool (2 workers x 2 OpenBLAS
     threads made the heat kernel's eigensolver 1.5 to 3 times slower on 2 cores).
     """
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures import as_completed
 
-    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    context = multiprocessing.get_context(method)
-    with ProcessPoolExecutor(min(jobs, len(tasks)), mp_context=context, initializer=_one_thread) as pool:
+    with process_pool(min(jobs, len(tasks))) as pool:
         futures = [pool.submit(function, task) for task in tasks]
         try:
             for future in (futures if ordered else as_completed(futures)):
@@ -58,6 +55,24 @@ def process_map(function, tasks: list, jobs: int, ordered: bool = False):
         finally:
             for future in futures:
                 future.cancel()
+
+
+@contextlib.contextmanager
+def process_pool(jobs: int):
+    """A ``concurrent.futures`` pool of ``jobs`` worker processes, made as :func:`process_map`
+    makes its own (forked where the platform allows, one BLAS/OpenMP thread each); work not yet
+    started is cancelled when the block ends by an error."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+    pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context(method), initializer=_one_thread)
+    try:
+        yield pool
+    except BaseException:
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
 
 
 def _one_thread() -> None:

@@ -53,9 +53,12 @@ def curvature_signature(mesh, mean_curvature: np.ndarray, lengths=MirrorTest().s
     """``(n, len(lengths))`` mean curvature diffused over each of ``lengths``, each scaled to mean
     magnitude 1: a cheap, intrinsic, mirror-blind signature that differs between the front and
     the back of a torso or a limb."""
+    from .operators import cotangent_laplacian
+
+    area, laplacian = mixed_voronoi_area(mesh), cotangent_laplacian(mesh)  # once for every length
     columns = []
     for length in lengths:
-        c = heat_diffuse(mesh, mean_curvature, length, steps=diffusion_steps)
+        c = heat_diffuse(mesh, mean_curvature, length, area, diffusion_steps, laplacian)
         columns.append(c / max(float(np.abs(c).mean()), 1e-12))
     return np.stack(columns, axis=1)
 

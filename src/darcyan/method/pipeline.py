@@ -26,7 +26,7 @@ from ..geometry.mesh import Mesh, MeshWarning
 from ..geometry.shape import Shape, prepare_shape
 from ..io.cache import ShapeCache, code_digest, file_digest
 from ..io.mesh_files import load_mesh
-from ..parallel import owns_threads, process_map
+from ..parallel import owns_threads, process_map, process_pool
 from .descriptors import angular_profiles, curvature_descriptors
 from .features import (
     AGD,
@@ -364,7 +364,11 @@ def describe_and_prepare(sources: list, config: DarcyanConfig = DarcyanConfig(),
     keys = [_cache_key(cache, p, config, repair) for p in paths]
     results = [_cached(cache, k, p) for k, p in zip(keys, paths)]
     tasks = [(path, config, repair, described is None, extra) for path, described in zip(paths, results)]
-    if jobs > 1 and len(paths) > 1:
+    if jobs > 1 and 1 < len(paths) <= jobs:
+        # This process takes the first file while workers take the others: one process fewer to
+        # start, the first shape needs no pickling, and the imports it makes serve what follows.
+        made = _beside_workers(tasks)
+    elif jobs > 1 and len(paths) > 1:
         import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the workers fork)
 
         made = list(process_map(_prepared, tasks, jobs, ordered=True))
@@ -380,6 +384,15 @@ def describe_and_prepare(sources: list, config: DarcyanConfig = DarcyanConfig(),
             results[i] = _from_arrays(paths[i], arrays)
         out.append((results[i], shape))
     return out
+
+
+def _beside_workers(tasks: list) -> list:
+    """``[_prepared(task) for task in tasks]``: the first in this process, the others at the same
+    time in worker processes."""
+    with process_pool(len(tasks) - 1) as pool:
+        others = [pool.submit(_prepared, task) for task in tasks[1:]]
+        first = _prepared(tasks[0])
+        return [first, *(future.result() for future in others)]
 
 
 def _prepared(task: tuple) -> tuple:
