@@ -106,7 +106,7 @@ def score_pair(task: tuple) -> dict:
     except DENSE_FAILURES as exc:  # no dense map for this pair: reported, the others go on
         return {"pair": f"{source_name}->{target_name}", "group": group, "failed": str(exc)}
     matchings = [correspondence] + list(correspondence.alternatives)
-    coords_1, coords_2 = landmark_coordinates(shape_1, shape_2, matchings[made.check["seed"]], config)
+    coords_1, coords_2 = landmark_coordinates(shape_1, shape_2, matchings[made.check.seed], config)
     source, target = true_pairs(shape_1, shape_2, truth)
     maps = {"default": made.target}
 

@@ -5,7 +5,7 @@
 
 For each of N pairs drawn (seed 0) from PAIRS (``source<TAB>target[<TAB>group]``): the shapes are
 described and matched with darcyan's defaults; one dense map with the defaults gives every
-seed's score (``DenseMap.check["signatures"]``: the sparse matching is seed 0, its alternatives
+seed's score (``DenseMap.check.verdict.signatures``: the sparse matching is seed 0, its alternatives
 1, 2, ...); then each seed alone (``candidates=1``) makes a dense map, scored on the same 300
 source vertices against the dataset's ground truth. Prints, for each margin, how many pairs the
 rule "an alternative replaces the sparse matching when its score is lower by the margin" fixes
@@ -57,7 +57,7 @@ def _score_pair(task: tuple) -> dict:
     warnings.simplefilter("ignore")
     shapes, correspondence, truth = prepared_pair(dataset, source, target, repair)
     default = dense_map(*shapes, correspondence)
-    signatures = {int(rank): score for rank, score in default.check["signatures"].items()}
+    signatures = {int(rank): score for rank, score in default.check.verdict.signatures.items()}
     matchings = [correspondence] + list(correspondence.alternatives)
     # A spectral start (no matching with three consistent landmarks) is one seed past the matchings.
     signatures = {rank: score for rank, score in signatures.items() if rank < len(matchings)}
@@ -66,10 +66,10 @@ def _score_pair(task: tuple) -> dict:
     scores = evaluate_dense_maps(shapes[0].mesh, shapes[1].mesh, maps, truth, SAMPLES, target_solver=shapes[1].solver)
     by_size = {size: seed_scores(*shapes, correspondence, DenseConfig(seed_basis=size)) for size in sizes}
     by_statistic = {name: seed_scores(*shapes, correspondence, DenseConfig(seed_statistic=name)) for name in statistics}
-    return {"pair": f"{source}->{target}", "group": group, "default_seed": default.check["seed"],
-            "trusted": default.check["trusted"], "default_rate": scores["default"].rate,
-            "orientation": default.check["orientation"], "distortion": default.check["distortion"],
-            "start": default.check.get("start", "matches"), "margin": float(correspondence.margin),
+    return {"pair": f"{source}->{target}", "group": group, "default_seed": default.check.seed,
+            "trusted": default.check.trusted, "default_rate": scores["default"].rate,
+            "orientation": default.check.orientation, "distortion": default.check.distortion,
+            "start": default.check.start, "margin": float(correspondence.margin),
             "seeds": [{"rank": rank, "signature": signatures[rank], "rate": scores[rank].rate,
                        "by_seed_basis": {str(size): by_size[size].get(rank) for size in sizes},
                        "by_statistic": {name: by_statistic[name].get(rank) for name in statistics}}

@@ -83,7 +83,7 @@ def score_pair(task: tuple) -> dict:
         start = time.perf_counter()
         try:
             made = dense_map(*shapes, correspondence, DenseConfig(**changes))
-            maps[name], checks[name] = made.target, made.check
+            maps[name], checks[name] = made.target, made.check.as_dict()
         except DarcyanError:  # too few landmarks: every vertex unmapped
             maps[name], checks[name] = np.full(shapes[0].n_input_vertices, -1), {}
         seconds[name] = time.perf_counter() - start

@@ -31,7 +31,7 @@ def test_the_same_bytes_as_the_command_sparse_and_dense(small_pose_files, tmp_pa
     dense = darcyan.correspond(str(a), str(b), dense=True)
     dense.to_csv(tmp_path / "api-map.csv")
     assert (tmp_path / "api-map.csv").read_bytes() == command_output(capsys, tmp_path, "cli-map.csv", a, b, "--dense")
-    assert dense[0].dense.check["trusted"] and len(dense[0].dense.target) == load_mesh(a).n_vertices
+    assert dense[0].dense.check.trusted and len(dense[0].dense.target) == load_mesh(a).n_vertices
 
 
 @pytest.mark.slow
@@ -92,13 +92,17 @@ def test_the_matches_follow_the_seed_of_their_dense_map():
     from conftest import tip_correspondence
 
     from darcyan.api import matches_of_map
-    from darcyan.dense.maps import DenseMap
+    from darcyan.dense.maps import DenseMap, MapCheck
+    from darcyan.dense.seeds import seed_check
 
     tips = synthetic.figure_tips()
     right = tip_correspondence(tips, tips)
     wrong = darcyan.Correspondence(tips, np.roll(tips, 1), np.zeros(len(tips)), None, alternatives=(right,))
-    seeded_by = lambda rank, start="matches": DenseMap(np.zeros(3, np.int64), np.zeros((0, 2), np.int64),  # noqa: E731
-                                                       check={"seed": rank, "start": start})
+
+    def seeded_by(rank, start="matches"):
+        verdict = seed_check(rank, {0: 1.0, rank: 0.5}, 0.04, start)
+        return DenseMap(np.zeros(3, np.int64), np.zeros((0, 2), np.int64), check=MapCheck(0.8, 0.01, verdict))
+
     assert matches_of_map(wrong, seeded_by(0)) is wrong
     assert matches_of_map(wrong, seeded_by(2, "spectral")) is wrong
     chosen = matches_of_map(wrong, seeded_by(1))

@@ -195,10 +195,10 @@ def test_a_person_front_and_back_are_not_swapped(faust):
     scores = {name: evaluate_dense(shapes[0].mesh, shapes[1].mesh, m.target, truth, target_solver=shapes[1].solver)
               for name, m in maps.items()}
     assert scores["turns"].rate >= 0.9 and scores["turns"].mean <= 0.025
-    assert maps["turns"].check["orientation"] > 0.7
+    assert maps["turns"].check.orientation > 0.7
     assert scores["signature turns"].rate >= 0.9
     # the check sees the flip of the distances-only map
-    assert scores["distances only"].rate < 0.6 and maps["distances only"].check["orientation"] < 0
+    assert scores["distances only"].rate < 0.6 and maps["distances only"].check.orientation < 0
 
 
 @pytest.mark.slow
@@ -265,14 +265,19 @@ def test_the_trust_rule_condition_by_condition():
 
     from conftest import tip_correspondence
 
-    from darcyan.dense.maps import trusted
+    from darcyan.dense.maps import MapCheck, trusted
+    from darcyan.dense.seeds import seed_check
 
-    good = {"orientation": 0.8, "start": "matches", "seed": 0, "clear": True}
+    def check(orientation=0.8, start="matches", seed=0, clear=True):
+        scores = {0: 1.0, 2: 1.0} if seed else {0: 1.0}
+        verdict = dc.replace(seed_check(seed, scores, 0.04, start), clear=clear)
+        return MapCheck(orientation, 0.01, verdict)
+
     sure = tip_correspondence([1, 2, 3], [1, 2, 3])  # in_doubt False
     doubt = dc.replace(sure, in_doubt=True)
     config = DenseConfig()
-    assert trusted(good, sure, config) and trusted(good, doubt, config)
-    assert not trusted({**good, "orientation": 0.1}, sure, config)
-    assert not trusted({**good, "start": "spectral"}, doubt, config)
-    assert not trusted({**good, "seed": 2}, sure, config) and trusted({**good, "seed": 2}, doubt, config)
-    assert not trusted({**good, "clear": False}, doubt, config) and trusted({**good, "clear": False}, sure, config)
+    assert trusted(check(), sure, config) and trusted(check(), doubt, config)
+    assert not trusted(check(orientation=0.1), sure, config)
+    assert not trusted(check(start="spectral"), doubt, config)
+    assert not trusted(check(seed=2), sure, config) and trusted(check(seed=2), doubt, config)
+    assert not trusted(check(clear=False), doubt, config) and trusted(check(clear=False), sure, config)

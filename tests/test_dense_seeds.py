@@ -29,8 +29,8 @@ def test_an_alternative_with_the_same_landmarks_is_not_a_rival_seed(figure_pair)
     same = tip_correspondence(np.concatenate([tips[::-1], [tips[3]]]), np.concatenate([tips[::-1], [tips[0]]]))
     swapped = tip_correspondence(tips, np.roll(tips, 1))  # other landmarks: a seed of its own
     result = dense_map(shape_1, shape_2, dataclasses.replace(right, alternatives=(same, swapped)), FAST_DENSE)
-    assert result.check["seeds"] == 2 and sorted(result.check["signatures"]) == [0, 2]
-    assert result.check["seed"] == 0 and result.check["clear"]
+    assert result.check.verdict.seeds == 2 and sorted(result.check.verdict.signatures) == [0, 2]
+    assert result.check.seed == 0 and result.check.verdict.clear
 
 
 @pytest.mark.slow
@@ -47,26 +47,26 @@ def test_a_mirrored_seed_is_replaced_by_the_alternative_that_keeps_the_body(faus
     scores = {name: evaluate_dense(shapes[0].mesh, shapes[1].mesh, m.target, truth, target_solver=shapes[1].solver)
               for name, m in maps.items()}
     assert scores["sparse only"].rate < 0.5  # the case is still what it was
-    assert maps["seeds"].check["seed"] > 0 and maps["sparse only"].check["seed"] == 0
+    assert maps["seeds"].check.seed > 0 and maps["sparse only"].check.seed == 0
     assert scores["seeds"].rate >= 0.9 and scores["seeds"].mean <= 0.03
-    assert maps["seeds"].check["signature"] < maps["seeds"].check["runner_up"]
+    assert maps["seeds"].check.verdict.signature < maps["seeds"].check.verdict.runner_up
     # the scores the map chose by, without making it
     from darcyan.dense import seed_scores
 
-    assert seed_scores(*shapes, correspondence) == maps["seeds"].check["signatures"]
+    assert seed_scores(*shapes, correspondence) == maps["seeds"].check.verdict.signatures
     # the same choice as sparse matches: all right, where the sparse stage's were not
     from darcyan.dense import verified_matches
     from darcyan.eval.metrics import score_matches
 
     verified, about = verified_matches(*shapes, correspondence)
-    assert about["seed"] == maps["seeds"].check["seed"]
+    assert about["seed"] == maps["seeds"].check.seed
     # scored on a spectrum of the short ZoomOuts' size: the same scores within a percent
-    assert about["signatures"].keys() == maps["seeds"].check["signatures"].keys()
-    for rank, score in maps["seeds"].check["signatures"].items():
+    assert about["signatures"].keys() == maps["seeds"].check.verdict.signatures.keys()
+    for rank, score in maps["seeds"].check.verdict.signatures.items():
         assert about["signatures"][rank] == pytest.approx(score, rel=0.01)
     # on the dense map's own basis (before a dense map): its scores exactly
     on_full_basis = verified_matches(*shapes, correspondence, full_basis=True)[1]
-    assert on_full_basis["signatures"] == maps["seeds"].check["signatures"]
+    assert on_full_basis["signatures"] == maps["seeds"].check.verdict.signatures
     before, after = score_matches(*shapes, correspondence, truth), score_matches(*shapes, verified, truth)
     assert before.correct < len(correspondence) and after.correct == len(verified) >= 5
     assert any(m is correspondence for m in verified.alternatives)  # the sparse matching stays an alternative
@@ -141,7 +141,7 @@ def test_a_verification_is_kept_per_pair_of_files_and_settings(small_pose_files,
 
     # computed once (a stand-in outcome choosing alternative 2), then read back without the shapes
     about = {"seed": 2, "seeds": 3, "signature": 0.5, "runner_up": 0.75, "signatures": {0: 0.75, 1: 0.8, 2: 0.5},
-             "clear": True}
+             "clear": True, "start": "matches"}
     monkeypatch.setattr(verify_module, "verified_matches",
                         lambda s1, s2, c, d, full: (matching_of_seed(c, 2), dict(about)))
     first, computed = verify(lambda: (None, None))
@@ -187,5 +187,5 @@ def test_a_map_that_sets_aside_a_sure_matching_is_not_trusted(figure_pair):
     wrong = dataclasses.replace(tip_correspondence(tips, np.roll(tips, 1)), alternatives=(tip_correspondence(tips, tips),))
     for in_doubt in (True, False):
         result = dense_map(shape_1, shape_2, dataclasses.replace(wrong, in_doubt=in_doubt), FAST_DENSE)
-        assert result.check["seed"] == 1 and result.check["orientation"] > 0.5
-        assert result.check["trusted"] is in_doubt
+        assert result.check.seed == 1 and result.check.orientation > 0.5
+        assert result.check.trusted is in_doubt

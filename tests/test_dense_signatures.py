@@ -58,3 +58,26 @@ def test_signature_score_by_median_ignores_a_region_that_changed():
                                                                                                  abs=0.02)
     with pytest.raises(ConfigError, match="seed_statistic"):
         DenseConfig(seed_statistic="mode")
+
+
+def test_point_signature_follows_the_callers_curvature_smoothing():
+    """A dense map's point signature uses the caller's curvature smoothing (issue 41), carried
+    into the dense section by DarcyanConfig; a standalone DenseConfig keeps the describe defaults."""
+    import dataclasses
+
+    from darcyan.config import DarcyanConfig, DenseConfig
+    from darcyan.dense.signatures import point_signature
+    from darcyan.geometry.shape import prepare_shape
+    from darcyan.geometry.synthetic import figure
+
+    assert DenseConfig().signature_smoothing is None
+    assert DarcyanConfig().dense.signature_smoothing == DarcyanConfig().curvature_smoothing
+    assert DarcyanConfig(curvature_smoothing=0).dense.signature_smoothing == 0
+    kept = DarcyanConfig(curvature_smoothing=0, dense=DenseConfig(signature_smoothing=2))
+    assert kept.dense.signature_smoothing == 2  # a section's own value is not overwritten
+    shape = prepare_shape(figure(subdivisions=3))
+    default = point_signature(shape, DarcyanConfig().dense)
+    assert np.array_equal(default, point_signature(shape, DenseConfig()))
+    raw = point_signature(shape, DarcyanConfig(curvature_smoothing=0).dense)
+    assert raw.shape == default.shape and not np.allclose(raw, default)
+    assert dataclasses.replace(DenseConfig(), signature_smoothing=0) != DenseConfig()

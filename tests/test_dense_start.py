@@ -36,11 +36,11 @@ def test_too_few_landmarks_still_give_a_right_map(figure_pair, given):
     shape_1, shape_2, _ = figure_pair
     tips = synthetic.figure_tips()[:given]
     result = dense_map(shape_1, shape_2, tip_correspondence(tips, tips), FAST_DENSE)
-    assert result.check["start"] == "spectral" and len(result.landmarks) >= 3
+    assert result.check.start == "spectral" and len(result.landmarks) >= 3
     score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED, target_solver=shape_2.solver)
     assert score.rate >= DENSE_MIN_RATE and score.mean <= DENSE_MAX_MEAN
-    assert result.check["orientation"] > 0.5
-    assert not result.check["trusted"]  # landmarks from a short map nothing else checked
+    assert result.check.orientation > 0.5
+    assert not result.check.trusted  # landmarks from a short map nothing else checked
 
 
 @pytest.mark.slow

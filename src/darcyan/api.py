@@ -247,10 +247,9 @@ def matches_of_map(matches: Correspondence, made: DenseMap) -> Correspondence:
     others kept as its alternatives. A map started without the matches leaves them as they are."""
     from .dense.seeds import matching_of_seed
 
-    check = made.check
-    if check.get("start", "matches") != "matches" or check.get("seed", 0) == 0:
+    if made.check is None or made.check.start != "matches" or made.check.seed == 0:
         return matches
-    return matching_of_seed(matches, check["seed"])
+    return matching_of_seed(matches, made.check.seed)
 
 
 def _input(item):

@@ -199,9 +199,9 @@ def _say_dense(say, target: str, source: str, dense, shapes, truth, quiet: bool 
     from .dense.maps import UNMAPPED
 
     check = dense.check
-    say(f"dense map: {_seed_verdict(check)}; orientation agreement {check['orientation']:.2f} (1: kept, "
-        f"-1: mirrored), landmark distortion {check['distortion']:.3f} sqrt(area)")
-    if check["trusted"]:
+    say(f"dense map: {_seed_verdict(check.verdict.as_dict())}; orientation agreement {check.orientation:.2f} (1: kept, "
+        f"-1: mirrored), landmark distortion {check.distortion:.3f} sqrt(area)")
+    if check.trusted:
         if not quiet:  # --quiet: warnings only
             print(f"darcyan: {target}: dense map trusted", file=sys.stderr)
     else:
@@ -265,7 +265,8 @@ def _output_format(args: argparse.Namespace) -> str:
 
 
 def _seed_verdict(about: dict) -> str:
-    """What the seed check (``DenseMap.check`` or ``verified_matches``' second result) decided."""
+    """What the seed check (a :class:`~darcyan.dense.seeds.SeedVerdict` as a dict:
+    ``DenseMap.check.verdict`` or ``verified_matches``' second result) decided."""
     if about.get("start") == "spectral":
         return (f"started without the feature matches (fewer than 3 consistent ones): landmarks from a short map "
                 f"started from {about.get('start_from', 'the spectra')}")

@@ -308,6 +308,12 @@ class DenseConfig:
         consistency: two matches agree when their geodesic distances on the two shapes differ by
             at most this fraction of the larger one (plus ``consistency_floor``).
         consistency_floor: absolute slack of that test, in sqrt(area) units.
+        exhaustive_landmarks: the largest consistent set is found by an exact maximum-clique
+            search among up to this many matches; among more, greedily (the match with the most
+            disagreements dropped until all agree).
+        landmark_tie_weight: between consistent sets of one size, the least total distortion
+            wins, plus this weight times the matches' descriptor distances (divided by their
+            largest): a tie-break, small beside any distortion.
         basis_start: size of the first functional map of ZoomOut.
         basis_size: size of the last one (Laplace-Beltrami eigenfunctions computed per shape:
             this many plus ``basis_margin``).
@@ -357,6 +363,10 @@ class DenseConfig:
         seed_basis, seed_samples: size of the short ZoomOut that scores each seed, and the
             samples it runs on.
         signature_lengths: diffusion lengths (sqrt(area)) of the mean curvature in that signature.
+        signature_smoothing, signature_diffusion_steps: the Meyer curvatures' one-ring averagings and
+            the diffusions' backward-Euler steps in that signature; ``None``: the describe stage's
+            (``curvature_smoothing`` and ``heat.diffusion_steps``), which :class:`DarcyanConfig`
+            writes into its ``dense`` section, so that a dense map follows the caller's settings.
         signature_weight: weight of the :func:`~darcyan.dense.signatures.point_signature` (each length divided by its
             standard deviation over both shapes) beside the other terms of the chosen seed's
             ZoomOut steps up to ``signature_until`` eigenfunctions (0: never). At the coarse sizes
@@ -372,7 +382,7 @@ class DenseConfig:
             the landmarks grow alike on all its sides; the turn from that direction to the one in
             which the curvature changes differs from one side to another (``docs/decisions/dense.md``).
         seed_margin: an alternative replaces the sparse matching only when its score is lower
-            by at least this share (``DenseMap.check["clear"]``: no other seed scored within
+            by at least this share (``DenseMap.check.verdict.clear``: no other seed scored within
             this share of the chosen one's).
         trust_orientation: a map is ``trusted`` (``DenseMap.check``) only when its orientation
             agreement is at least this (a map flipped against its landmarks scores -0.5 to -0.7,
@@ -429,6 +439,8 @@ class DenseConfig:
     landmarks: str = "consistent"
     consistency: float = 0.3
     consistency_floor: float = 0.02
+    exhaustive_landmarks: int = 24
+    landmark_tie_weight: float = 1e-3
     basis_start: int = 10
     basis_size: int = 120
     basis_step: int = 4
@@ -447,6 +459,8 @@ class DenseConfig:
     seed_basis: int = 30
     seed_samples: int = 1000
     signature_lengths: tuple = (0.02, 0.05, 0.1)
+    signature_smoothing: int | None = None
+    signature_diffusion_steps: int | None = None
     signature_weight: float = 3.0
     signature_until: int = 70
     signature_turns: float = 2.0
@@ -476,7 +490,7 @@ class DenseConfig:
         if self.landmarks not in LANDMARK_MODES:
             raise ConfigError(f"dense: landmarks must be one of {LANDMARK_MODES}, got {self.landmarks!r}")
         for name in ("basis_start", "basis_size", "basis_step", "local_search_reach", "candidates", "seed_basis",
-                     "seed_samples", "ensemble", "alignment_iterations", "start_dimensions", "start_landmarks",
+                     "seed_samples", "ensemble", "alignment_iterations", "exhaustive_landmarks", "start_dimensions", "start_landmarks",
                      "start_checked"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
@@ -488,6 +502,10 @@ class DenseConfig:
             value = getattr(self, name)
             if not isinstance(value, int) or value < 0:
                 raise ConfigError(f"dense: {name} must be a non-negative integer, got {value!r}")
+        for name, least in (("signature_smoothing", 0), ("signature_diffusion_steps", 1)):
+            value = getattr(self, name)
+            if value is not None and (not isinstance(value, int) or isinstance(value, bool) or value < least):
+                raise ConfigError(f"dense: {name} must be None or an integer >= {least}, got {value!r}")
         lengths = self.signature_lengths
         if (not isinstance(lengths, (list, tuple)) or not lengths
                 or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0 for x in lengths)):
@@ -499,7 +517,7 @@ class DenseConfig:
             raise ConfigError(f"dense: trust_orientation must be in [-1, 1], got {self.trust_orientation!r}")
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
                      "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns",
-                     "commutativity", "alignment_normal_weight", "alignment_slack"):
+                     "commutativity", "alignment_normal_weight", "alignment_slack", "landmark_tie_weight"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0
                     and math.isfinite(value)):
@@ -643,6 +661,13 @@ class DarcyanConfig:
                 object.__setattr__(self, name, value)
             if not isinstance(value, kind):
                 raise ConfigError(f"config: {name} must be a {kind.__name__}, got {value!r}")
+        # The dense map's point signature follows this config's curvature smoothing and diffusion
+        # unless its section says otherwise.
+        signature = {"signature_smoothing": self.curvature_smoothing,
+                     "signature_diffusion_steps": self.heat.diffusion_steps}
+        unset = {name: value for name, value in signature.items() if getattr(self.dense, name) is None}
+        if unset:
+            object.__setattr__(self, "dense", dataclasses.replace(self.dense, **unset))
 
     def replace(self, **changes) -> "DarcyanConfig":
         """A copy with some fields changed (validated again)."""

@@ -375,10 +375,10 @@ def _dense_records(job: dict, target: Shape) -> list:
             info["timings"] = {k: float(v) for k, v in result.timings.items()}
             if method == "darcyan":
                 info["landmarks"] = len(result.landmarks)
-                info["check"] = result.check
+                info["check"] = result.check.as_dict()
                 # how right the seed was (scored after the timing: it reads the ground truth)
-                if result.check.get("start", "matches") == "matches":  # a spectral start has no sparse seed
-                    info.update(_seed_score(job, target, correspondence, result.check["seed"]))
+                if result.check.start == "matches":  # a spectral start has no sparse seed
+                    info.update(_seed_score(job, target, correspondence, result.check.seed))
         except DENSE_FAILURES as exc:
             seconds = time.perf_counter() - start
             if method not in maps:

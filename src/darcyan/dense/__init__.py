@@ -8,8 +8,8 @@ verification kept per pair of files) and ``pyfm`` (pyFM's pipeline)."""
 
 from .config import DenseConfig
 from .landmarks import consistent_landmarks
-from .maps import UNMAPPED, DenseMap, dense_map, dense_map_to_csv, pyfm_own_map
-from .seeds import seed_scores, verified_matches
+from .maps import UNMAPPED, DenseMap, MapCheck, dense_map, dense_map_to_csv, pyfm_own_map, shape_operators
+from .seeds import SeedVerdict, seed_scores, verified_matches
 
-__all__ = ["UNMAPPED", "DenseConfig", "DenseMap", "consistent_landmarks", "dense_map", "dense_map_to_csv",
-           "pyfm_own_map", "seed_scores", "verified_matches"]
+__all__ = ["UNMAPPED", "DenseConfig", "DenseMap", "MapCheck", "SeedVerdict", "consistent_landmarks", "dense_map",
+           "dense_map_to_csv", "pyfm_own_map", "seed_scores", "shape_operators", "verified_matches"]

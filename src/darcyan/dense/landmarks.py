@@ -17,15 +17,13 @@ from ..errors import DarcyanError
 from .config import DenseConfig
 
 MIN_LANDMARKS = 3
-# Consistent landmark sets: exact maximum-clique search up to this many matches, greedy above.
-MAX_EXHAUSTIVE_LANDMARKS = 24
-# Weight of the (normalized) descriptor distances when breaking ties between landmark sets.
-TIE_BREAK_WEIGHT = 1e-3
+# The default of consistent_landmarks' exhaustive limit (DenseConfig.exhaustive_landmarks).
+MAX_EXHAUSTIVE_LANDMARKS = DenseConfig().exhaustive_landmarks
 FACE_BLOCK = 32768  # faces per block of the orientation coordinates' products (memory, not results)
 
 
 def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float, floor: float,
-                         cost: np.ndarray | None = None) -> np.ndarray:
+                         cost: np.ndarray | None = None, exhaustive: int = MAX_EXHAUSTIVE_LANDMARKS) -> np.ndarray:
     """The largest set of matches whose pairwise geodesic distances agree on both shapes.
 
     Args:
@@ -38,7 +36,7 @@ def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float
 
     Returns:
         ``(m,) int64`` indices of the kept matches: a maximum clique of the agreement graph
-        (exhaustive search up to :data:`MAX_EXHAUSTIVE_LANDMARKS` matches; above, the match
+        (exhaustive search up to ``exhaustive`` matches; above, the match
         with the most disagreements is dropped until all agree).
     """
     k = len(dist_1)
@@ -47,7 +45,7 @@ def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float
     distortion = np.abs(dist_1 - dist_2)
     agree = distortion <= relative * np.maximum(dist_1, dist_2) + floor
     np.fill_diagonal(agree, True)
-    if k > MAX_EXHAUSTIVE_LANDMARKS:
+    if k > exhaustive:
         kept = np.arange(k)
         while not agree[np.ix_(kept, kept)].all():
             kept = np.delete(kept, np.argmax((~agree[np.ix_(kept, kept)]).sum(axis=1)))
@@ -99,7 +97,7 @@ def _landmark_pairs(shape_1, shape_2, correspondence, config: DenseConfig, field
         finite = np.where(np.isfinite(cost), cost, 0.0)
         scale = finite.max() if finite.max() > 0 else 1.0
         keep = consistent_landmarks(fields_1[src], fields_2[tgt], config.consistency, config.consistency_floor,
-                                    cost=finite / scale * TIE_BREAK_WEIGHT)
+                                    cost=finite / scale * config.landmark_tie_weight, exhaustive=config.exhaustive_landmarks)
         src, tgt, fields_1, fields_2 = src[keep], tgt[keep], fields_1[:, keep], fields_2[:, keep]
     return src, tgt, fields_1, fields_2
 

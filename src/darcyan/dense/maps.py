@@ -24,6 +24,7 @@ without darcyan's landmarks, the baseline of ``darcyan bench --dense``; maps are
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -36,7 +37,7 @@ from ..parallel import owns_threads
 from .alignment import aligned_map
 from .config import DenseConfig
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
-from .seeds import check_of_seeds, choose_seed
+from .seeds import SeedVerdict, check_of_seeds, choose_seed
 from .signatures import point_signature, signature_coordinates, signature_turn_coordinates
 from .zoomout import consensus_map, dense_eigenvalues, dense_spectrum, read_out_map, zoomout, zoomout_samples
 
@@ -44,6 +45,44 @@ UNMAPPED = -1  # source vertices the analysis left out (outside the largest comp
 # What a dense map may raise on a pair it cannot map (too few consistent landmarks, an eigensolver
 # that does not converge): callers report it and go on (the bench records the pair as failed).
 DENSE_FAILURES = (DarcyanError, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError)
+
+
+@dataclass(frozen=True)
+class MapCheck:
+    """What a dense map's own checks say of it.
+
+    Attributes:
+        orientation: the area-weighted agreement in [-1, 1] of the landmarks' orientation
+            coordinates at each vertex and its image (1: kept everywhere, -1: a mirror image;
+            :func:`map_check`).
+        distortion: the area-weighted mean change of the geodesic distances to the landmarks
+            from a vertex to its image (sqrt(area) units).
+        verdict: which seed the map took and how plainly
+            (:class:`~darcyan.dense.seeds.SeedVerdict`: ``seed``, ``signatures``, ``clear``,
+            ``start``, ...).
+        trusted: whether the map is trusted (:func:`trusted`).
+    """
+
+    orientation: float
+    distortion: float
+    verdict: SeedVerdict
+    trusted: bool = False
+
+    @property
+    def seed(self) -> int:
+        """The chosen seed's rank (0: the sparse matching)."""
+        return self.verdict.seed
+
+    @property
+    def start(self) -> str:
+        """How the map was started: ``"matches"`` or ``"spectral"``."""
+        return self.verdict.start
+
+    def as_dict(self) -> dict:
+        """Flat, as JSON records keep it: ``orientation``, ``distortion``, the verdict's fields
+        and ``trusted``."""
+        return {"orientation": self.orientation, "distortion": self.distortion, **self.verdict.as_dict(),
+                "trusted": self.trusted}
 
 
 @dataclass
@@ -55,20 +94,14 @@ class DenseMap:
             numbering), :data:`UNMAPPED` for source vertices outside the analysed mesh.
         landmarks: ``(k, 2) int64`` (source, target) landmark pairs used, input numbering.
         timings: seconds per stage.
-        check: what :func:`map_check` says of the map (``orientation`` in [-1, 1], ``distortion``),
-            which seed was used (``seed``: 0 the sparse matching, i its i-th alternative, of
-            ``seeds`` usable, distinct ones), its ``signature`` score, the ``runner_up``'s and every
-            seed's (``signatures``: rank -> score), whether no other seed came within the
-            margin (``clear``), how the map was started (``start``: ``"matches"``, or ``"spectral"``
-            when no matching had three consistent landmarks, with ``start_from`` the short map
-            whose landmarks it used, :mod:`darcyan.dense.start`) and whether the map is ``trusted``
-            (see :class:`~darcyan.dense.config.DenseConfig`).
+        check: the map's :class:`MapCheck` (orientation, distortion, the seed's verdict, trust);
+            ``None`` for a map made without darcyan's checks (:func:`pyfm_own_map`).
     """
 
     target: np.ndarray
     landmarks: np.ndarray
     timings: dict = field(default_factory=dict)
-    check: dict = field(default_factory=dict)
+    check: MapCheck | None = None
 
 
 @owns_threads
@@ -142,9 +175,9 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             timings["alignment"] = time.perf_counter() - t
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([mesh_1.input_index[src], mesh_2.input_index[tgt]], axis=1)
-    check = map_check(shape_1, local, fields_1, fields_2, turns_1, turns_2)
-    check.update(check_of_seeds(seed, seeds, config.seed_margin))
-    check["trusted"] = trusted(check, correspondence, config)
+    orientation, distortion = map_check(shape_1, local, fields_1, fields_2, turns_1, turns_2)
+    check = MapCheck(orientation, distortion, check_of_seeds(seed, seeds, config.seed_margin))
+    check = dataclasses.replace(check, trusted=trusted(check, correspondence, config))
     return DenseMap(target, landmarks, timings, check)
 
 
@@ -160,7 +193,7 @@ def shape_operators(shape, config: DenseConfig = DenseConfig()) -> None:
         point_signature(shape, config)
 
 
-def trusted(check: dict, correspondence, config: DenseConfig) -> bool:
+def trusted(check: MapCheck, correspondence, config: DenseConfig) -> bool:
     """Whether a map's ``check`` lets it be trusted. All of:
 
     - its orientation agrees with its landmarks (at least ``config.trust_orientation``);
@@ -170,14 +203,14 @@ def trusted(check: dict, correspondence, config: DenseConfig) -> bool:
       alternative: two independent judgments, the sparse stage's orientation test and the dense
       stage's curvature signature, would disagree;
     - a matching the sparse stage was in doubt of stood clear of its rivals in the dense stage
-      (``check["clear"]``): then the dense stage's judgment is the only one, and it must be plain.
+      (``check.verdict.clear``): then the dense stage's judgment is the only one, and it must be plain.
 
     Measured on the shared sets and the hard copies: ``docs/decisions/every-pair.md``."""
     in_doubt = getattr(correspondence, "in_doubt", True)
-    from_matches = check.get("start", "matches") == "matches"
-    overrode = from_matches and check.get("seed", 0) != 0 and not in_doubt
-    return bool(check["orientation"] >= config.trust_orientation and from_matches and not overrode
-                and (check.get("clear", True) or not in_doubt))
+    from_matches = check.start == "matches"
+    overrode = from_matches and check.seed != 0 and not in_doubt
+    return bool(check.orientation >= config.trust_orientation and from_matches and not overrode
+                and (check.verdict.clear or not in_doubt))
 
 
 def input_map(shape_1, shape_2, local: np.ndarray) -> np.ndarray:
@@ -190,12 +223,13 @@ def input_map(shape_1, shape_2, local: np.ndarray) -> np.ndarray:
     return target
 
 
-def map_check(shape_1, local: np.ndarray, distances_1, distances_2, turns_1, turns_2) -> dict:
+def map_check(shape_1, local: np.ndarray, distances_1, distances_2, turns_1, turns_2) -> tuple[float, float]:
     """How far a map ``local (n1,)`` (prepared numbering) keeps what its landmarks say:
     ``orientation``, the area-weighted correlation of the
     :func:`~darcyan.dense.landmarks.orientation_coordinates` at each source vertex and at its
     image (1: kept everywhere, -1: a mirror image); ``distortion``, the area-weighted mean change
-    of the geodesic distances to the landmarks from a vertex to its image (sqrt(area) units)."""
+    of the geodesic distances to the landmarks from a vertex to its image (sqrt(area) units):
+    ``(orientation, distortion)``."""
     area = shape_1.vertex_areas / shape_1.vertex_areas.sum()
     a, b = turns_1, turns_2[local]
     a, b = a - area @ a, b - area @ b
@@ -203,7 +237,7 @@ def map_check(shape_1, local: np.ndarray, distances_1, distances_2, turns_1, tur
     scale = np.sqrt((area @ (a * a)).sum() * (area @ (b * b)).sum())
     orientation = float(covariance / scale) if scale > 0 else 0.0
     distortion = float(area @ np.abs(distances_1 - distances_2[local]).mean(axis=1))
-    return {"orientation": orientation, "distortion": distortion}
+    return orientation, distortion
 
 
 def pyfm_own_map(mesh_1: Mesh, mesh_2: Mesh, n_input_vertices: int | None = None) -> DenseMap:

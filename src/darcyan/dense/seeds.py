@@ -41,9 +41,9 @@ def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = Den
     does (when a dense map follows, which then reuses that basis).
 
     Returns ``(matches, about)``: a correspondence of the same kind as ``correspondence`` (its
-    ``alternatives`` the others, the sparse matching first among them), and what
-    :attr:`~darcyan.dense.maps.DenseMap.check` says of seeds (``seed``, ``signatures``, ``clear``: no other
-    candidate within the margin).
+    ``alternatives`` the others, the sparse matching first among them), and the
+    :class:`SeedVerdict` as a dict (``seed``, ``signatures``, ``clear``: no other candidate
+    within the margin; kept so in caches and JSON records).
 
     Raises:
         DarcyanError: when no candidate has :data:`~darcyan.dense.landmarks.MIN_LANDMARKS` consistent matches.
@@ -51,8 +51,8 @@ def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = Den
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
     scoring = config if full_basis else seed_scoring_config(config)
     choice = choose_seed(shape_1, shape_2, correspondence, scoring, lambda stage: None, {}, spectral_start=False)
-    return matching_of_seed(correspondence, choice.seed.rank), check_of_seeds(choice.seed, choice.seeds,
-                                                                               config.seed_margin)
+    verdict = check_of_seeds(choice.seed, choice.seeds, config.seed_margin)
+    return matching_of_seed(correspondence, choice.seed.rank), verdict.as_dict()
 
 
 def seed_scoring_config(config: DenseConfig) -> DenseConfig:
@@ -88,22 +88,52 @@ def seed_scores(shape_1, shape_2, correspondence, config: DenseConfig = DenseCon
     return verified_matches(shape_1, shape_2, correspondence, config, full_basis=True)[1]["signatures"]
 
 
-def seed_check(rank: int, signatures: dict, margin: float) -> dict:
-    """What :attr:`~darcyan.dense.maps.DenseMap.check` says of the seeds, from the chosen seed's ``rank`` and every
-    usable seed's score (``signatures``: rank -> score): ``clear`` when no other seed scores
-    within ``margin`` (relative) of it."""
+@dataclass(frozen=True)
+class SeedVerdict:
+    """Which seed a dense map (or a verification) took, and how plainly.
+
+    Attributes:
+        seed: the chosen seed's rank (0: the sparse matching; 1, 2, ...: its alternatives; one
+            past them: the landmark-free start).
+        seeds: how many usable, distinct seeds were weighed.
+        signature: the chosen seed's signature score (lower is better; 0 when it had no rival).
+        runner_up: the best score of the others (``None`` without others).
+        signatures: every usable seed's score (rank -> score).
+        clear: whether no other seed scored within the margin (relative) of it.
+        start: how the map was started: ``"matches"``, or ``"spectral"`` when no matching had
+            three consistent landmarks (:mod:`darcyan.dense.start`).
+        start_from: with a spectral start, the short map whose landmarks it used.
+    """
+
+    seed: int
+    seeds: int
+    signature: float
+    runner_up: float | None
+    signatures: dict
+    clear: bool
+    start: str = "matches"
+    start_from: str = ""
+
+    def as_dict(self) -> dict:
+        """The fields as a dict (``start_from`` only when set), as JSON records keep them."""
+        fields = dataclasses.asdict(self)
+        if not self.start_from:
+            del fields["start_from"]
+        return fields
+
+
+def seed_check(rank: int, signatures: dict, margin: float, start: str = "matches", start_from: str = "") -> SeedVerdict:
+    """The :class:`SeedVerdict` of the chosen seed's ``rank`` given every usable seed's score
+    (``signatures``: rank -> score): ``clear`` when no other seed scores within ``margin``
+    (relative) of it."""
     others = sorted(score for r, score in signatures.items() if r != rank)
-    return {"seed": rank, "seeds": len(signatures), "signature": signatures[rank],
-            "runner_up": others[0] if others else None, "signatures": dict(signatures),
-            "clear": bool(not others or signatures[rank] <= (1.0 - margin) * others[0])}
+    return SeedVerdict(rank, len(signatures), signatures[rank], others[0] if others else None, dict(signatures),
+                       bool(not others or signatures[rank] <= (1.0 - margin) * others[0]), start, start_from)
 
 
-def check_of_seeds(seed, seeds: list, margin: float) -> dict:
-    check = seed_check(seed.rank, {s.rank: s.signature for s in seeds}, margin)
-    check["start"] = seed.start
-    if seed.start_from:
-        check["start_from"] = seed.start_from
-    return check
+def check_of_seeds(seed, seeds: list, margin: float) -> SeedVerdict:
+    """The :class:`SeedVerdict` of ``seed`` among the usable ``seeds`` (:class:`Seed` each)."""
+    return seed_check(seed.rank, {s.rank: s.signature for s in seeds}, margin, seed.start, seed.start_from)
 
 
 @dataclass(frozen=True)

@@ -19,19 +19,23 @@ def point_signature(shape, config: DenseConfig) -> np.ndarray:
     """``(n, len(config.signature_lengths))`` the shape's mean curvature diffused over each of
     ``config.signature_lengths`` (:func:`darcyan.geometry.heat.curvature_signature`: intrinsic
     enough to survive a change of pose, different on the front and the back of a body), on the
-    coarse proxy of a large mesh."""
+    coarse proxy of a large mesh; the curvatures smoothed ``config.signature_smoothing`` times
+    and diffused in ``config.signature_diffusion_steps`` steps (``None``: the defaults of the
+    describe stage; a :class:`~darcyan.config.DarcyanConfig`'s ``dense`` section carries its own)."""
     from ..config import DarcyanConfig
     from ..geometry.heat import shape_signature
 
-    describe = DarcyanConfig()  # the describe stage's curvature smoothing and diffusion steps
+    describe = DarcyanConfig()
+    smoothing = describe.curvature_smoothing if config.signature_smoothing is None else config.signature_smoothing
+    steps = describe.heat.diffusion_steps if config.signature_diffusion_steps is None else config.signature_diffusion_steps
 
     def compute():
         proxy = shape.proxy(config.basis_proxy_vertices) if config.basis_proxy_vertices > 0 else None
-        return shape_signature(shape, proxy, config.signature_lengths, describe.heat.diffusion_steps,
-                               describe.curvature_smoothing)
+        return shape_signature(shape, proxy, config.signature_lengths, steps, smoothing)
 
     # once per shape: --verify and the dense map, or several dense variants, score seeds alike
-    return shape.derived(("point signature", config.signature_lengths, config.basis_proxy_vertices), compute)
+    return shape.derived(("point signature", config.signature_lengths, config.basis_proxy_vertices, smoothing, steps),
+                         compute)
 
 
 def signature_coordinates(shape_1, shape_2, config: DenseConfig, sample_1: np.ndarray,

@@ -83,4 +83,4 @@ def _about_from_arrays(stored: dict | None, correspondence, margin: float) -> di
     seed, ranks = int(stored["seed"]), stored["ranks"].tolist()
     if seed not in ranks or seed > len(getattr(correspondence, "alternatives", ())):
         return None
-    return seed_check(seed, dict(zip(ranks, stored["scores"].tolist())), margin)
+    return seed_check(seed, dict(zip(ranks, stored["scores"].tolist())), margin).as_dict()

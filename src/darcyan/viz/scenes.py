@@ -404,7 +404,7 @@ class DenseScene:
         sample_vertices: ``(s,)`` source vertices (indices of ``source``) scored against ground
             truth, ``sample_errors (s,)`` their geodesic errors (sqrt(area)); ``None`` without.
         threshold: a vertex is mapped right within this error.
-        check: the map's own check (:func:`darcyan.dense.maps.map_check`).
+        check: the map's own check (:class:`darcyan.dense.maps.MapCheck`), or ``None``.
         source_camera, target_camera: one camera per shape (their poses differ).
     """
 
@@ -417,7 +417,7 @@ class DenseScene:
     sample_vertices: np.ndarray | None
     sample_errors: np.ndarray | None
     threshold: float
-    check: dict
+    check: object
     source_camera: Camera
     target_camera: Camera
 
@@ -455,7 +455,7 @@ def dense_scene(source: Shape, target: Shape, dense, truth: GroundTruth | None =
                                     threshold=threshold)
         samples, errors = source.mesh_index(scored.source_vertices), scored.errors
     return DenseScene(mesh_1, mesh_2, source.name, target.name, colours_1, colours_2, samples, errors, threshold,
-                      dict(getattr(dense, "check", {}) or {}), overview_camera(mesh_1), overview_camera(mesh_2))
+                      getattr(dense, "check", None), overview_camera(mesh_1), overview_camera(mesh_2))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -850,9 +850,9 @@ def render_dense(scene: DenseScene, path: str | os.PathLike, title: str | None =
         bar.set_label("error (\u221aarea); darkest: 0.25 or more", fontsize=7)
     check = scene.check
     note = "a seam or a flip shows as a jump of colour between the first two panels"
-    if "orientation" in check:
-        note += (f"\nthe map's own check: orientation agreement {check['orientation']:.2f} "
-                 f"(1: kept, -1: mirrored), landmark distortion {check['distortion']:.3f} \u221aarea")
+    if check is not None:
+        note += (f"\nthe map's own check: orientation agreement {check.orientation:.2f} "
+                 f"(1: kept, -1: mirrored), landmark distortion {check.distortion:.3f} \u221aarea")
     fig.text(0.02, 0.015, note, ha="left", fontsize=7.5, color="#333333")
     fig.suptitle(title or f"dense map {Path(scene.source_name).name} \u2192 {Path(scene.target_name).name}",
                  fontsize=11, y=0.97)
