@@ -21,8 +21,7 @@ from .errors import DarcyanError
 from .geometry.mesh import Mesh
 from .geometry.shape import Shape, prepare_shape
 from .io.cache import ShapeCache
-from .method.pipeline import (Correspondence, analyze_shape, describe_and_prepare, describe_shapes, load_shape,
-                              match_shapes)
+from .method.pipeline import Correspondence, analyze_shape, describe_and_prepare, describe_shapes, load_shape, match_shapes
 from .parallel import owns_threads
 
 VERIFY_CHOICES = ("auto", True, False)

@@ -23,8 +23,8 @@ import dataclasses
 import numpy as np
 
 from ..geometry.knn import KDTREE_MAX_DIM, nearest_rows, nearest_rows_near
-from ..parallel import own_threads
 from ..geometry.sampling import farthest_point_vertices, sample_vertices
+from ..parallel import own_threads
 from .config import DenseConfig
 
 # Shift of the shift-invert eigen solver (just below the zero eigenvalue of the Laplacian).

@@ -26,7 +26,6 @@ from .operators import cotangent_laplacian, gradient_operator, mixed_voronoi_are
 from .repair import prepare_mesh
 from .spectral import SHIFT, Spectrum, laplace_beltrami_spectrum
 
-
 # What a pickled Shape keeps of what it built (beside derived arrays): what costs time to make.
 PORTABLE_MEMO = ("curvatures", "spectrum", "proxy", "proxy spectrum")
 
