@@ -177,9 +177,10 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
     landmarks = config.landmark_weight > 0 and f_a is not None
 
     def query_rows(rows: slice) -> list:
-        parts = [b_a[rows, :p] @ c_ab]
+        a = b_a[rows, :p]  # read once: a basis interpolated from a proxy is interpolated as it is read
+        parts = [a @ c_ab]
         if total > 0:
-            parts += [np.sqrt(total) * b_a[rows, :k], np.zeros((len(b_a[rows]), 1))]
+            parts += [np.sqrt(total) * a[:, :k], np.zeros((len(a), 1))]
         if landmarks:
             parts.append(config.landmark_weight * f_a[rows])
         if g_a is not None:
@@ -187,13 +188,14 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
         return parts
 
     def reference_rows(rows: slice) -> list:
-        parts = [b_b[rows, :k]]
+        parts = [b_b[rows, :k]] if total <= 0 else []
         if total > 0:
             # Both terms compare b_a[i] with a row of b: w1 |a - x_j|^2 + w2 |a - y_j|^2 equals
             # (w1 + w2) |a - m_j|^2 + w1 w2 / (w1 + w2) |x_j - y_j|^2 with m_j their weighted mean:
             # one block of k columns and one column carrying the j-only part, not two blocks.
-            x, y = b_b[rows, :p] @ c_ba, b_b[rows, :k] @ c_ab[:k].T
-            parts += [(w1 * x + w2 * y) / np.sqrt(total), np.sqrt(w1 * w2 / total) * np.linalg.norm(x - y, axis=1)[:, None]]
+            b = b_b[rows, :p]
+            x, y = b @ c_ba, b[:, :k] @ c_ab[:k].T
+            parts += [b[:, :k], (w1 * x + w2 * y) / np.sqrt(total), np.sqrt(w1 * w2 / total) * np.linalg.norm(x - y, axis=1)[:, None]]
         if landmarks:
             parts.append(config.landmark_weight * f_b[rows])
         if g_b is not None:

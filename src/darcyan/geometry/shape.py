@@ -113,7 +113,8 @@ class Shape:
     def smooth_spectrum(self, k: int, proxy_vertices: int = 0, tol: float = 0.0, shift: float = SHIFT) -> Spectrum:
         """The eigenpairs behind :meth:`smooth_basis`: on a large mesh the coarse proxy's
         eigenvalues and its eigenvectors interpolated to the vertices (``mass``: the mesh's
-        vertex areas; the interpolated vectors are then not mass-orthonormal)."""
+        vertex areas; the interpolated vectors are then not mass-orthonormal, and are
+        :class:`~darcyan.geometry.proxy.InterpolatedRows`: interpolated as they are read)."""
         proxy = self.proxy(proxy_vertices) if proxy_vertices > 0 else None
         if proxy is None:
             return self.spectrum(k, tol, shift)
@@ -121,7 +122,7 @@ class Shape:
         def interpolated():
             coarse = self._once(("proxy spectrum", k, proxy_vertices, tol, shift), lambda: laplace_beltrami_spectrum(
                 proxy.mesh, min(k, proxy.mesh.n_vertices - 1), tol=tol, shift=shift))
-            return Spectrum(coarse.values, proxy.to_full(coarse.vectors), self.vertex_areas)
+            return Spectrum(coarse.values, proxy.rows_on_demand(coarse.vectors), self.vertex_areas)
 
         return self._once(("proxy basis", k, proxy_vertices, tol, shift), interpolated)
 
