@@ -13,6 +13,8 @@ landmarks disagree with the source vertex's clearly more than ZoomOut's image's 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..geometry.deformation import ArapDeformation
@@ -22,8 +24,26 @@ from ..geometry.mesh import Mesh
 from .config import DenseConfig
 
 
+@dataclass(frozen=True)
+class Alignment:
+    """What :func:`align` made: ``map_12 (n1,)`` the aligned map, and ``residual``: how far the
+    last deformation stayed from the images it was pulled towards (area-weighted mean distance,
+    sqrt(area) units; NaN without alignment). A map that an as-rigid-as-possible deformation can
+    follow (an isometry, or near one) leaves a small residual; one that would need the source
+    mirrored or torn (a left-right or front-back flip, limbs sent to other limbs) a large one."""
+
+    map_12: np.ndarray
+    residual: float
+
+
 def aligned_map(shape_1, shape_2, map_12: np.ndarray, config: DenseConfig = DenseConfig(),
                 fields_1: np.ndarray | None = None, fields_2: np.ndarray | None = None) -> np.ndarray:
+    """:func:`align`'s map alone."""
+    return align(shape_1, shape_2, map_12, config, fields_1, fields_2).map_12
+
+
+def align(shape_1, shape_2, map_12: np.ndarray, config: DenseConfig = DenseConfig(),
+          fields_1: np.ndarray | None = None, fields_2: np.ndarray | None = None) -> Alignment:
     """``(n1,) int64``: ``map_12 (n1,)`` (for each vertex of ``shape_1``'s mesh one of
     ``shape_2``'s) after ``config.alignment_rounds`` rounds of deformation and nearest points
     (unchanged with 0 rounds). With the geodesic distances to the landmarks on both shapes
@@ -33,7 +53,7 @@ def aligned_map(shape_1, shape_2, map_12: np.ndarray, config: DenseConfig = Dens
     map every vertex (no :data:`~darcyan.dense.maps.UNMAPPED`). Memory and time O(n1 + n2) (times
     k) beside the deformation's sparse factorization, kept with ``shape_1``."""
     if config.alignment_rounds == 0:
-        return map_12
+        return Alignment(map_12, float("nan"))
     start = map_12
     length, weight = config.alignment_length, config.alignment_normal_weight
     deformation = shape_1.derived(("arap", length), lambda: ArapDeformation(
@@ -41,11 +61,14 @@ def aligned_map(shape_1, shape_2, map_12: np.ndarray, config: DenseConfig = Dens
     target = np.hstack([shape_2.mesh.vertices, weight * shape_2.normals])
     positions = None
     for _ in range(config.alignment_rounds):
-        positions = deformation.fit(shape_2.mesh.vertices[map_12], config.alignment_iterations, start=positions)
+        pulled_to = shape_2.mesh.vertices[map_12]
+        positions = deformation.fit(pulled_to, config.alignment_iterations, start=positions)
         normals = vertex_normals(Mesh(positions, shape_1.mesh.faces))
         map_12 = nearest_rows(target, np.hstack([positions, weight * normals]))
     if fields_1 is not None and fields_2 is not None and fields_1.shape[1] > 0:
         before = np.abs(fields_1 - fields_2[start]).max(axis=1)
         after = np.abs(fields_1 - fields_2[map_12]).max(axis=1)
         map_12 = np.where(after > before + config.alignment_slack, start, map_12)
-    return map_12
+    areas = shape_1.vertex_areas / shape_1.vertex_areas.sum()
+    residual = float(areas @ np.linalg.norm(positions - pulled_to, axis=1))
+    return Alignment(map_12, residual)

@@ -34,7 +34,7 @@ from ..errors import DarcyanError
 from ..geometry.knn import nearest_rows
 from ..geometry.mesh import Mesh
 from ..parallel import owns_threads
-from .alignment import aligned_map
+from .alignment import align
 from .config import DenseConfig
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
 from .seeds import SeedVerdict, check_of_seeds, choose_seed
@@ -61,12 +61,16 @@ class MapCheck:
             (:class:`~darcyan.dense.seeds.SeedVerdict`: ``seed``, ``signatures``, ``clear``,
             ``start``, ...).
         trusted: whether the map is trusted (:func:`trusted`).
+        residual: how far the alignment's as-rigid-as-possible deformation of the source stayed
+            from the images it was pulled towards (sqrt(area) units; NaN without alignment;
+            :class:`~darcyan.dense.alignment.Alignment`).
     """
 
     orientation: float
     distortion: float
     verdict: SeedVerdict
     trusted: bool = False
+    residual: float = float("nan")
 
     @property
     def seed(self) -> int:
@@ -82,7 +86,7 @@ class MapCheck:
         """Flat, as JSON records keep it: ``orientation``, ``distortion``, the verdict's fields
         and ``trusted``."""
         return {"orientation": self.orientation, "distortion": self.distortion, **self.verdict.as_dict(),
-                "trusted": self.trusted}
+                "trusted": self.trusted, "residual": self.residual}
 
 
 @dataclass
@@ -139,6 +143,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     src, tgt, fields_1, fields_2 = seed.source, seed.target, seed.fields_1, seed.fields_2
     turns_1, turns_2, coords_1, coords_2 = seed.turns_1, seed.turns_2, seed.coords_1, seed.coords_2
     t = time.perf_counter()
+    residual = float("nan")
     if config.method == "pyfm":
         say("pyfm")
         local = pyfm_point_map(mesh_1, mesh_2, DENSE_PIPELINE, src, tgt)
@@ -171,12 +176,13 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         if config.alignment_rounds > 0:
             say("alignment")
             t = time.perf_counter()
-            local = aligned_map(shape_1, shape_2, local, config, fields_1, fields_2)
+            alignment = align(shape_1, shape_2, local, config, fields_1, fields_2)
+            local, residual = alignment.map_12, alignment.residual
             timings["alignment"] = time.perf_counter() - t
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([mesh_1.input_index[src], mesh_2.input_index[tgt]], axis=1)
     orientation, distortion = map_check(shape_1, local, fields_1, fields_2, turns_1, turns_2)
-    check = MapCheck(orientation, distortion, check_of_seeds(seed, seeds, config.seed_margin))
+    check = MapCheck(orientation, distortion, check_of_seeds(seed, seeds, config.seed_margin), residual=residual)
     check = dataclasses.replace(check, trusted=trusted(check, correspondence, config))
     return DenseMap(target, landmarks, timings, check)
 
