@@ -53,7 +53,7 @@ def figures(tmp_path_factory, bench_cache):
 def computed_and_reused(err: str) -> tuple:
     line = [x for x in err.splitlines() if "results computed" in x][-1]
     words = line.split()
-    return int(words[1]), int(words[line.split().index("computed,") + 1])
+    return int(words[1]), int(words[words.index("pair),") + 1])
 
 
 def test_classes_pairs_and_dataset_errors(tmp_path, figures):

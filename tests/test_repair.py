@@ -104,7 +104,7 @@ def test_soup_is_refused_without_repair_and_welded_back_with_it(tosca):
     mesh = tosca_5k(tosca, "wolf0")
     soupy = soup(mesh)
     with pytest.raises(MeshError, match=f"{mesh.n_faces} components of 1 face each: a triangle soup\\? "
-                                        f"--repair welds coincident vertices"):
+                                        f"--repair \\(repair=True in Python\\) welds coincident vertices"):
         prepare_mesh(soupy)
 
     welded, changes = prepare_mesh(soupy, repair=True)
@@ -141,7 +141,7 @@ def test_a_surface_split_along_seams_is_refused_without_repair_and_welded_with_i
     seamed = split_along_equator(sphere)
     copies = seamed.n_vertices - sphere.n_vertices
     assert copies > 20
-    with pytest.raises(MeshError, match=f"{2 * copies} boundary vertices coincide with others .*--repair welds"):
+    with pytest.raises(MeshError, match=f"{2 * copies} boundary vertices coincide with others .*--repair .*welds"):
         prepare_mesh(seamed)
     welded, changes = prepare_mesh(seamed, repair=True)
     assert welded.n_vertices == sphere.n_vertices and changes[0].startswith(f"welded {copies} coincident")
@@ -176,7 +176,7 @@ def test_soup_is_one_error_line_on_the_command_line(capsys, tmp_path):
     assert main(["features", str(path), "--no-cache"]) == 2
     out, err = capsys.readouterr()
     assert out == "" and err == (f"darcyan: error: {path}: 320 components of 1 face each: a triangle soup? "
-                                 f"--repair welds coincident vertices\n")
+                                 f"--repair (repair=True in Python) welds coincident vertices\n")
 
 
 def test_fin_on_an_edge_is_split_off_and_refused_as_strict():

@@ -309,3 +309,24 @@ def test_cli_dense_plot_and_html(poses, tmp_path, capsys, monkeypatch):
     assert "orientation agreement" in said and "map.png" in said and "map.html" in said
     assert (tmp_path / "map.png").stat().st_size > 10_000
     assert "vertexcolor" in (tmp_path / "map.html").read_text()
+
+
+def test_match_scene_counts_the_files_vertices_not_the_split_copies():
+    """A picture's title quotes the file's vertex count, not the prepared mesh's (two spheres
+    touching at one vertex: the vertex is split, and one sphere is analysed; issue 41)."""
+    from darcyan.geometry.mesh import Mesh
+
+    ball = synthetic.icosphere(3)
+    top = int(np.argmax(ball.vertices[:, 2]))
+    other = ball.vertices.copy()
+    other[:, 2] = 2 * ball.vertices[top, 2] - other[:, 2]  # mirrored above, touching at the top vertex
+    bottom = int(np.argmin(other[:, 2]))
+    keep = np.arange(len(other)) != bottom
+    renumber = np.cumsum(keep) - 1 + len(ball.vertices)
+    renumber[bottom] = top
+    faces = np.vstack([ball.faces, renumber[ball.faces[:, ::-1]]])
+    touching = Mesh(np.vstack([ball.vertices, other[keep]]), faces, "touching")
+    with pytest.warns(UserWarning, match="split 1 non-manifold"):
+        scene = viz.match_scene(touching, touching, Pairs(np.array([0, 5, 9]), np.array([0, 5, 9])))
+    assert scene.source.mesh.n_vertices == len(ball.vertices)  # one sphere, its copy of the vertex
+    assert scene.source.input_vertices == touching.n_vertices

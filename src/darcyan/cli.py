@@ -385,7 +385,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
                        progress=not args.quiet, dense=args.dense, dense_samples=args.dense_samples)
     if not args.quiet:
         print(report_markdown(result.results))
-    print(f"darcyan: {result.computed} method x pair results computed, {result.reused} reused; "
+    print(f"darcyan: {result.computed} results computed (matchings and dense maps, per method and pair), "
+          f"{result.reused} reused; "
           f"{result.seconds:.0f} s; results in {result.out}", file=sys.stderr)
     return 0
 

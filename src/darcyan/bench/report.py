@@ -186,7 +186,7 @@ def report_markdown(results: dict) -> str:
                  + ("`corres/*.vts` (p's true correspondent at the geodesically nearest listed sample)"
                     if results["ground_truth"] == "vts" else "identity on vertex indices within a class")
                  + f". Threshold {results['threshold']} (geodesic error / sqrt(target area)). "
-                 f"{sum(m['overall']['pairs'] for m in methods.values())} method x pair results of "
+                 f"{sum(m['overall']['pairs'] for m in methods.values())} matchings (method x pair) of "
                  f"{results['pairs_expected']} pairs x {len(methods)} method(s); wall time of the last run "
                  f"{clock(results['wall_seconds'])}.")
     lines += ["", RATE_DEFINITION + " rate_sym also counts a match correct under the mirror ground truth "

@@ -229,7 +229,7 @@ def _refuse_seams(mesh: Mesh) -> None:
     copies = int(counts[counts > 1].sum())
     if copies:
         raise MeshError(mesh.name, f"{copies} boundary vertices coincide with others (a surface split "
-                                   f"along seams?); --repair welds them")
+                                   f"along seams?); --repair (repair=True in Python) welds them")
 
 
 def _refuse_soup(mesh: Mesh, repair: bool, tolerance: float) -> None:
@@ -247,7 +247,7 @@ def _refuse_soup(mesh: Mesh, repair: bool, tolerance: float) -> None:
             raise MeshError(mesh.name, f"{single} components of 1 face each: a triangle soup? "
                                        f"(welding is off: weld_tolerance 0)")
         raise MeshError(mesh.name, f"{single} components of 1 face each: a triangle soup? "
-                                   f"--repair welds coincident vertices")
+                                   f"--repair (repair=True in Python) welds coincident vertices")
 
 
 # ----------------------------------------------------------------------------------------------

@@ -322,13 +322,16 @@ def grid_scene(source: str | os.PathLike | Mesh, vertex: int | None = None, feat
 @dataclass
 class ShapeView:
     """One shape of a match scene: the prepared, normalized (area 1) ``mesh``, its ``name``,
-    ``points (k,)`` the matched points as indices of ``mesh``, and ``kmax``/``kmin`` ``(V,)``."""
+    ``points (k,)`` the matched points as indices of ``mesh``, and ``kmax``/``kmin`` ``(V,)``;
+    ``input_vertices``: the file's vertex count (the prepared mesh may have more, where a
+    non-manifold vertex was split, or fewer), which titles quote."""
 
     mesh: Mesh
     name: str
     points: np.ndarray
     kmax: np.ndarray
     kmin: np.ndarray
+    input_vertices: int | None = None
 
 
 @dataclass
@@ -379,7 +382,7 @@ def match_scene(source, target, correspondence, truth: GroundTruth | None = None
         shape = given if isinstance(given, Shape) else prepare_shape(_load(given)[0], config, repair)
         points = np.array([_mesh_index(shape, int(v)) for v in vertices], dtype=np.int64)
         curv = shape.curvatures(config.curvature_smoothing)
-        views.append(ShapeView(shape.mesh, shape.name, points, curv.kmax, curv.kmin))
+        views.append(ShapeView(shape.mesh, shape.name, points, curv.kmax, curv.kmin, shape.n_input_vertices))
         shapes.append(shape)
     if score is None and truth is not None:
         score = score_matches(shapes[0], shapes[1], correspondence, truth, threshold)
@@ -768,7 +771,8 @@ def render_matches(scene: MatchScene, path: str | os.PathLike, title: str | None
                            linewidths=1.6, zorder=5)
                 ax.annotate(f"{i + 1}*", (t2[0], t2[1]), xytext=(8, -12), textcoords="offset points", fontsize=7.5,
                             color="black", zorder=5, path_effects=outline)
-        ax.set_title(f"{side}: {Path(view.name).name} ({view.mesh.n_vertices} vertices)", fontsize=9)
+        vertices = view.mesh.n_vertices if view.input_vertices is None else view.input_vertices
+        ax.set_title(f"{side}: {Path(view.name).name} ({vertices} vertices)", fontsize=9)
 
     handles, labels = [], []
     for i in range(k):
