@@ -337,9 +337,13 @@ def describe_shapes(sources: list, config: DarcyanConfig = DarcyanConfig(), repa
     todo = [i for i, r in enumerate(results) if r is None]
     if jobs <= 1 or len(todo) <= 1:
         return [r if r is not None else describe_shape(p, config, repair, cache) for r, p in zip(results, paths)]
-    import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the workers fork)
+    tasks = [(paths[i], config, repair) for i in todo]
+    if len(todo) <= jobs:  # this process takes the first file, workers the others (as describe_and_prepare)
+        made = _beside_workers(_describe_arrays, tasks)
+    else:
+        import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the workers fork)
 
-    made = list(process_map(_describe_arrays, [(paths[i], config, repair) for i in todo], jobs, ordered=True))
+        made = list(process_map(_describe_arrays, tasks, jobs, ordered=True))
     for i, (arrays, said) in zip(todo, made):
         for message in said:
             warnings.warn(message, MeshWarning, stacklevel=2)
@@ -365,9 +369,7 @@ def describe_and_prepare(sources: list, config: DarcyanConfig = DarcyanConfig(),
     results = [_cached(cache, k, p) for k, p in zip(keys, paths)]
     tasks = [(path, config, repair, described is None, extra) for path, described in zip(paths, results)]
     if jobs > 1 and 1 < len(paths) <= jobs:
-        # This process takes the first file while workers take the others: one process fewer to
-        # start, the first shape needs no pickling, and the imports it makes serve what follows.
-        made = _beside_workers(tasks)
+        made = _beside_workers(_prepared, tasks)
     elif jobs > 1 and len(paths) > 1:
         import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the workers fork)
 
@@ -386,12 +388,13 @@ def describe_and_prepare(sources: list, config: DarcyanConfig = DarcyanConfig(),
     return out
 
 
-def _beside_workers(tasks: list) -> list:
-    """``[_prepared(task) for task in tasks]``: the first in this process, the others at the same
-    time in worker processes."""
+def _beside_workers(function, tasks: list) -> list:
+    """``[function(task) for task in tasks]``: the first in this process, the others at the same
+    time in worker processes (one process fewer to start; the first result needs no pickling,
+    and the imports it makes serve what follows)."""
     with process_pool(len(tasks) - 1) as pool:
-        others = [pool.submit(_prepared, task) for task in tasks[1:]]
-        first = _prepared(tasks[0])
+        others = [pool.submit(function, task) for task in tasks[1:]]
+        first = function(tasks[0])
         return [first, *(future.result() for future in others)]
 
 
