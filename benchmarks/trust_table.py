@@ -27,7 +27,7 @@ def dense_records(folder: Path, method: str = "darcyan") -> list:
     return [r for r in rows if r.get("kind") == "dense" and r.get("method") == method]
 
 
-def summary(records: list, right: float) -> dict:
+def summary(records: list, right: float, residual_below: float | None = None) -> dict:
     mapped = [r for r in records if not r.get("failed")]
     rates = np.array([r["rate"] for r in mapped])
     within = sum(r["within"] for r in mapped)
@@ -35,6 +35,9 @@ def summary(records: list, right: float) -> dict:
     errors = [r["mean_error"] * r["mapped"] for r in mapped if r.get("mean_error") is not None]
     counted = sum(r["mapped"] for r in mapped if r.get("mean_error") is not None)
     trusted = np.array([bool(r.get("check", {}).get("trusted")) for r in mapped])
+    residuals = np.array([r.get("check", {}).get("residual", np.nan) for r in mapped], dtype=float)
+    if residual_below is not None:  # a candidate condition beside the recorded rule
+        trusted &= ~(residuals > residual_below)
     good = rates >= right
     starts: dict = {}
     for r in mapped:
@@ -45,13 +48,16 @@ def summary(records: list, right: float) -> dict:
             "mean x100": 100 * sum(errors) / counted if counted else float("nan"),
             "trusted right": int((trusted & good).sum()), "trusted collapsed": int((trusted & ~good).sum()),
             "untrusted right": int((~trusted & good).sum()), "untrusted collapsed": int((~trusted & ~good).sum()),
-            "starts": starts, "worst": sorted((r["rate"], f"{r['source']} -> {r['target']}") for r in mapped)[:3]}
+            "starts": starts, "worst": sorted((r["rate"], f"{r['source']} -> {r['target']}") for r in mapped)[:3],
+            "residuals": (residuals[good], residuals[~good])}
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("folders", nargs="+", type=Path)
     parser.add_argument("--right", type=float, default=0.8, help="a map is right at this share within 0.05")
+    parser.add_argument("--residual-below", type=float, help="also require the alignment's residual (check['residual'], "
+                        "sqrt(area)) at most this: a candidate condition of the trust rule, tried on the records")
     args = parser.parse_args(argv)
     pooled = []
     columns = ("pairs", "no map", "collapsed", "wholly wrong", "within", "mean x100", "trusted right",
@@ -66,12 +72,18 @@ def main(argv=None) -> int:
     for folder in args.folders:
         records = runs[folder]
         pooled += records
-        row = summary(records, args.right)
+        row = summary(records, args.right, args.residual_below)
         print(f"| {folder.name} | " + " | ".join(_cell(row[c]) for c in columns)
               + f" | {row['starts']} | {', '.join(f'{n} {r:.2f}' for r, n in row['worst'])} |")
     if len(args.folders) > 1:
-        row = summary(pooled, args.right)
+        row = summary(pooled, args.right, args.residual_below)
         print("| pooled | " + " | ".join(_cell(row[c]) for c in columns) + f" | {row['starts']} | |")
+    right_residuals, collapsed_residuals = summary(pooled, args.right)["residuals"]
+    for name, values in (("right", right_residuals), ("collapsed", collapsed_residuals)):
+        values = values[np.isfinite(values)]
+        if len(values):
+            print(f"\nalignment residual of {name} maps ({len(values)}): min {values.min():.4f}, median "
+                  f"{np.median(values):.4f}, 95% {np.quantile(values, 0.95):.4f}, max {values.max():.4f}")
     baseline = [(folder, dense_records(folder, "pyfm")) for folder in args.folders]
     if any(records for _, records in baseline):  # pyFM's own pipeline in the same runs, for contrast
         print("\n| set | pyFM pairs | collapsed | wholly wrong | within | mean x100 |\n| --- | --- | --- | --- | --- | --- |")
