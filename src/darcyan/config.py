@@ -388,11 +388,15 @@ class DenseConfig:
             agreement is at least this (a map flipped against its landmarks scores -0.5 to -0.7,
             a right one 0.6 to 0.9), among other conditions (:func:`~darcyan.dense.maps.trusted`).
         local_search_above: a target mesh with more vertices than this is searched coarse to
-            fine for the final map (:func:`darcyan.geometry.knn.nearest_rows_near`: near the
-            image's nearest ZoomOut sample) instead of over all its vertices: O(V) instead of
-            O(V^2) work.
+            fine for the final map (:func:`darcyan.geometry.knn.nearest_rows_near`: in cells of
+            equal vertex count, as many as ZoomOut's samples, near the image's nearest cell)
+            instead of over all its vertices: O(V) instead of O(V^2) work.
         local_search_reach: the coarse-to-fine search looks at the cells of this many samples
             around the nearest one.
+        local_search_guess: each vertex's nearest cell is sought among this many times
+            ``local_search_reach`` cells around a guess (the image of the source sample nearest
+            the vertex), not among all cells: 1 lost 0.4 to 1.5 points within 0.05 on TOSCA's
+            52k humans, 4 is as the full search to 0.4 points (``docs/decisions/speed.md``).
         commutativity: weight of a Laplacian commutativity term in the functional maps of the
             chosen seed's ZoomOut (its steps and final map): each entry ``C[i, j]`` of a
             least-squares fit is shrunk by ``1 / (1 + commutativity ((l_i - l_j) / (l_i +
@@ -468,6 +472,7 @@ class DenseConfig:
     trust_orientation: float = 0.3
     local_search_above: int = 20000
     local_search_reach: int = 16
+    local_search_guess: int = 4
     commutativity: float = 3.0
     seed: int = 0
     sampling: str = "random"
@@ -490,7 +495,7 @@ class DenseConfig:
         if self.landmarks not in LANDMARK_MODES:
             raise ConfigError(f"dense: landmarks must be one of {LANDMARK_MODES}, got {self.landmarks!r}")
         for name in ("basis_start", "basis_size", "basis_step", "local_search_reach", "candidates", "seed_basis",
-                     "seed_samples", "ensemble", "alignment_iterations", "exhaustive_landmarks", "start_dimensions", "start_landmarks",
+                     "seed_samples", "ensemble", "alignment_iterations", "exhaustive_landmarks", "local_search_guess", "start_dimensions", "start_landmarks",
                      "start_checked"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:

@@ -315,7 +315,8 @@ def read_out_map(shape_2, basis_1: np.ndarray, basis_2: np.ndarray, c_12: np.nda
 
             images = nearest_rows(r[cells], q[sample_1])
             guess = images[cKDTree(positions_1[sample_1]).query(positions_1, workers=own_threads())[1]]
-        return nearest_rows_near(r, q, mesh_2.vertices, cells, config.local_search_reach, guess)
+        return nearest_rows_near(r, q, mesh_2.vertices, cells, config.local_search_reach, guess,
+                                 config.local_search_guess * config.local_search_reach)
     return nearest_rows(r, q)
 
 

@@ -111,7 +111,7 @@ def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
 
 
 def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.ndarray, coarse: np.ndarray,
-                      reach: int, guess: np.ndarray | None = None) -> np.ndarray:
+                      reach: int, guess: np.ndarray | None = None, guess_reach: int | None = None) -> np.ndarray:
     """``(q,) int64``: for each row of ``queries (q, d)``, the nearest row of ``reference (n, d)``
     among those lying near its nearest *coarse* row: a coarse-to-fine :func:`nearest_rows` for
     embeddings of surface points, in ``O(q (m + reach n / m) d)`` instead of ``O(q n d)``.
@@ -126,8 +126,9 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
 
     ``guess (q,)``, when given: for each query, the index into ``coarse`` of a sample it is
     expected to lie near (e.g. the image of the source sample nearest to it in space). Its
-    nearest sample is then sought only among the ``reach`` samples nearest the guess (in space),
-    not among all m: ``O(q reach d)`` instead of ``O(q m d)``, the larger cost on a large mesh.
+    nearest sample is then sought only among the ``guess_reach`` (default ``reach``) samples
+    nearest the guess (in space), not among all m: ``O(q guess_reach d)`` instead of
+    ``O(q m d)``, the larger cost on a large mesh.
     """
     from scipy.spatial import cKDTree
 
@@ -142,7 +143,8 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
     by_cell = np.argsort(cell, kind="stable")
     bounds = np.searchsorted(cell[by_cell], np.arange(len(coarse) + 1))
     nearest_sample = nearest_rows(reference[coarse], queries) if guess is None else \
-        _nearest_around(reference[coarse], queries, np.asarray(guess, dtype=np.int64), around)
+        _nearest_around(reference[coarse], queries, np.asarray(guess, dtype=np.int64),
+                        tree.query(positions[coarse], k=min(guess_reach or reach, len(coarse)))[1].reshape(len(coarse), -1))
     ref_sq = np.einsum("ij,ij->i", reference, reference)
     out = np.empty(len(queries), dtype=np.int64)
     by_query = np.argsort(nearest_sample, kind="stable")
