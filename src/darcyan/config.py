@@ -495,7 +495,8 @@ class DenseConfig:
         if self.landmarks not in LANDMARK_MODES:
             raise ConfigError(f"dense: landmarks must be one of {LANDMARK_MODES}, got {self.landmarks!r}")
         for name in ("basis_start", "basis_size", "basis_step", "local_search_reach", "candidates", "seed_basis",
-                     "seed_samples", "ensemble", "alignment_iterations", "exhaustive_landmarks", "local_search_guess", "start_dimensions", "start_landmarks",
+                     "seed_samples", "ensemble", "alignment_iterations", "exhaustive_landmarks", "local_search_guess",
+                     "start_dimensions", "start_landmarks",
                      "start_checked"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
