@@ -268,10 +268,10 @@ def test_the_trust_rule_condition_by_condition():
     from darcyan.dense.maps import MapCheck, trusted
     from darcyan.dense.seeds import seed_check
 
-    def check(orientation=0.8, start="matches", seed=0, clear=True):
+    def check(orientation=0.8, start="matches", seed=0, clear=True, residual=0.006):
         scores = {0: 1.0, 2: 1.0} if seed else {0: 1.0}
         verdict = dc.replace(seed_check(seed, scores, 0.04, start), clear=clear)
-        return MapCheck(orientation, 0.01, verdict)
+        return MapCheck(orientation, 0.01, verdict, residual=residual)
 
     sure = tip_correspondence([1, 2, 3], [1, 2, 3])  # in_doubt False
     doubt = dc.replace(sure, in_doubt=True)
@@ -281,3 +281,4 @@ def test_the_trust_rule_condition_by_condition():
     assert not trusted(check(start="spectral"), doubt, config)
     assert not trusted(check(seed=2), sure, config) and trusted(check(seed=2), doubt, config)
     assert not trusted(check(clear=False), doubt, config) and trusted(check(clear=False), sure, config)
+    assert not trusted(check(residual=0.02), sure, config) and trusted(check(residual=float("nan")), sure, config)

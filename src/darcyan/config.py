@@ -387,6 +387,11 @@ class DenseConfig:
         trust_orientation: a map is ``trusted`` (``DenseMap.check``) only when its orientation
             agreement is at least this (a map flipped against its landmarks scores -0.5 to -0.7,
             a right one 0.6 to 0.9), among other conditions (:func:`~darcyan.dense.maps.trusted`).
+        trust_residual: a map is ``trusted`` only when the alignment's deformation stayed within
+            this mean distance (sqrt(area)) of the images it was pulled to
+            (``MapCheck.residual``): right maps of every benchmark set stayed within 0.0116, and
+            every wholly wrong map the other conditions trusted went beyond 0.0126
+            (``docs/decisions/every-pair.md``).
         local_search_above: a target mesh with more vertices than this is searched coarse to
             fine for the final map (:func:`darcyan.geometry.knn.nearest_rows_near`: in cells of
             equal vertex count, as many as ZoomOut's samples, near the image's nearest cell)
@@ -470,6 +475,7 @@ class DenseConfig:
     signature_turns: float = 2.0
     seed_margin: float = 0.04
     trust_orientation: float = 0.3
+    trust_residual: float = 0.012
     local_search_above: int = 20000
     local_search_reach: int = 16
     local_search_guess: int = 4
@@ -523,7 +529,8 @@ class DenseConfig:
             raise ConfigError(f"dense: trust_orientation must be in [-1, 1], got {self.trust_orientation!r}")
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
                      "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns",
-                     "commutativity", "alignment_normal_weight", "alignment_slack", "landmark_tie_weight"):
+                     "commutativity", "alignment_normal_weight", "alignment_slack", "landmark_tie_weight",
+                     "trust_residual"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0
                     and math.isfinite(value)):

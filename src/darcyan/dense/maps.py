@@ -209,14 +209,17 @@ def trusted(check: MapCheck, correspondence, config: DenseConfig) -> bool:
       alternative: two independent judgments, the sparse stage's orientation test and the dense
       stage's curvature signature, would disagree;
     - a matching the sparse stage was in doubt of stood clear of its rivals in the dense stage
-      (``check.verdict.clear``): then the dense stage's judgment is the only one, and it must be plain.
+      (``check.verdict.clear``): then the dense stage's judgment is the only one, and it must be plain;
+    - the alignment's deformation could follow it: its residual (``check.residual``) is at most
+      ``config.trust_residual`` (a map that needs the source mirrored or torn cannot be followed
+      as rigidly as possible; without alignment, NaN, this condition holds).
 
     Measured on the shared sets and the hard copies: ``docs/decisions/every-pair.md``."""
     in_doubt = getattr(correspondence, "in_doubt", True)
     from_matches = check.start == "matches"
     overrode = from_matches and check.seed != 0 and not in_doubt
     return bool(check.orientation >= config.trust_orientation and from_matches and not overrode
-                and (check.verdict.clear or not in_doubt))
+                and (check.verdict.clear or not in_doubt) and not check.residual > config.trust_residual)
 
 
 def input_map(shape_1, shape_2, local: np.ndarray) -> np.ndarray:
