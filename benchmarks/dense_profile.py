@@ -23,7 +23,8 @@ does through the library's front door (:func:`darcyan.correspond`, which the com
 
 Peak memory per stage is the resident set size's high-water mark of the child (VmHWM, reset
 before each stage through ``/proc/self/clear_refs``; the worker's own is not counted, it is
-smaller). Whole: ``wait4``'s ``ru_maxrss`` of the child, its wall and CPU time. Medians over
+smaller). Whole: the child's wall and CPU time (``wait4``) and the largest of its stages' peaks
+(the resets reset ``ru_maxrss`` too). Medians over
 ``--repeat`` runs. The 210k pair is TOSCA's david0 and david1 subdivided once
 (``trimesh.remesh.subdivide``, 210,160 vertices each), written to ``--work`` on first use.
 """
@@ -138,7 +139,9 @@ def measure(source: str, target: str, dense: bool) -> dict:
         if os.waitstatus_to_exitcode(status) != 0:
             raise SystemExit(f"dense_profile: the child failed on {source} -> {target}: {process.stderr.read()[-2000:]}")
         out = json.loads(report.read_text())
-    out.update(wall=wall, cpu=usage.ru_utime + usage.ru_stime, peak_mb=usage.ru_maxrss / 1024.0)
+    # The stages' resets of the high-water mark reset ru_maxrss too: the whole peak is theirs.
+    peaks = [stage["peak_mb"] for stage in out["stages"].values()]
+    out.update(wall=wall, cpu=usage.ru_utime + usage.ru_stime, peak_mb=max([usage.ru_maxrss / 1024.0, *peaks]))
     return out
 
 
@@ -200,7 +203,7 @@ def main(argv: list | None = None) -> int:
         load = " ".join(fh.read().split()[:3])
     print(f"Cold `darcyan match A B [--dense] --no-cache -o map.csv` through darcyan.correspond, medians of "
           f"{args.repeat} run(s), {os.cpu_count()} cores, load average {load}; per stage wall time / peak RSS of "
-          f"the process during it.\n")
+          f"the process during it (MiB).\n")
     print(table(results))
     if args.json:
         args.json.write_text(json.dumps(raw, indent=1))
