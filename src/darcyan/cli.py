@@ -199,7 +199,11 @@ def _say_dense(say, target: str, source: str, dense, shapes, truth, quiet: bool 
     from .dense.maps import UNMAPPED
 
     check = dense.check
-    say(f"dense map: {_seed_verdict(check.verdict.as_dict())}; orientation agreement {check.orientation:.2f} (1: kept, "
+    verdict = _seed_verdict(check.verdict.as_dict())
+    if check.rescued_from is not None:
+        verdict = (f"alternative matching {check.seed} replaces the one the seeds' scores chose "
+                   f"({check.rescued_from}): the alignment could not follow that one's map")
+    say(f"dense map: {verdict}; orientation agreement {check.orientation:.2f} (1: kept, "
         f"-1: mirrored), landmark distortion {check.distortion:.3f} sqrt(area)")
     if check.trusted:
         if not quiet:  # --quiet: warnings only

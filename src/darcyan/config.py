@@ -392,6 +392,10 @@ class DenseConfig:
             (``MapCheck.residual``): right maps of every benchmark set stayed within 0.0116, and
             every wholly wrong map the other conditions trusted went beyond 0.0126
             (``docs/decisions/every-pair.md``).
+        rescue_seeds: when the alignment could not follow the chosen seed's map (its residual
+            above ``trust_residual``), the maps of up to this many other seeds (by signature
+            score) are made and aligned too, and the one with the least residual is kept (0:
+            never; ``docs/decisions/every-pair.md``).
         local_search_above: a target mesh with more vertices than this is searched coarse to
             fine for the final map (:func:`darcyan.geometry.knn.nearest_rows_near`: in cells of
             equal vertex count, as many as ZoomOut's samples, near the image's nearest cell)
@@ -476,6 +480,7 @@ class DenseConfig:
     seed_margin: float = 0.04
     trust_orientation: float = 0.3
     trust_residual: float = 0.012
+    rescue_seeds: int = 3
     local_search_above: int = 20000
     local_search_reach: int = 16
     local_search_guess: int = 4
@@ -510,7 +515,7 @@ class DenseConfig:
         if self.basis_start > self.basis_size:
             raise ConfigError(f"dense: basis_start ({self.basis_start}) exceeds basis_size ({self.basis_size})")
         for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "signature_until",
-                     "basis_margin", "margin_from", "alignment_rounds"):
+                     "basis_margin", "margin_from", "alignment_rounds", "rescue_seeds"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 0:
                 raise ConfigError(f"dense: {name} must be a non-negative integer, got {value!r}")
