@@ -40,6 +40,8 @@ def _other_value(value):
         return value * 1.1 + (0.01 if value >= 0 else -0.01)
     if isinstance(value, tuple):
         return tuple(v * 1.1 for v in value)
+    if value is None:  # an optional count left to a default (e.g. DenseConfig.signature_smoothing)
+        return 2
     raise AssertionError(f"no other value for {value!r}")
 
 

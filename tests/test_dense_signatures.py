@@ -61,8 +61,8 @@ def test_signature_score_by_median_ignores_a_region_that_changed():
 
 
 def test_point_signature_follows_the_callers_curvature_smoothing():
-    """A dense map's point signature uses the caller's curvature smoothing (issue 41), carried
-    into the dense section by DarcyanConfig; a standalone DenseConfig keeps the describe defaults."""
+    """A dense map's point signature uses the caller's curvature smoothing (issue 41), filled into
+    the dense section by DarcyanConfig.dense_for; a standalone DenseConfig keeps the describe defaults."""
     import dataclasses
 
     from darcyan.config import DarcyanConfig, DenseConfig
@@ -71,13 +71,17 @@ def test_point_signature_follows_the_callers_curvature_smoothing():
     from darcyan.geometry.synthetic import figure
 
     assert DenseConfig().signature_smoothing is None
-    assert DarcyanConfig().dense.signature_smoothing == DarcyanConfig().curvature_smoothing
-    assert DarcyanConfig(curvature_smoothing=0).dense.signature_smoothing == 0
+    assert DarcyanConfig().dense_for().signature_smoothing == DarcyanConfig().curvature_smoothing
+    assert DarcyanConfig(curvature_smoothing=0).dense_for().signature_smoothing == 0
+    # however the config was made: replace, updated (a --config file), the command's options
+    assert DarcyanConfig().replace(curvature_smoothing=1).dense_for().signature_smoothing == 1
+    assert DarcyanConfig().updated({"heat": {"diffusion_steps": 7}}).dense_for().signature_diffusion_steps == 7
     kept = DarcyanConfig(curvature_smoothing=0, dense=DenseConfig(signature_smoothing=2))
-    assert kept.dense.signature_smoothing == 2  # a section's own value is not overwritten
+    assert kept.dense_for().signature_smoothing == 2  # a section's own value is not overwritten
+    assert DarcyanConfig(curvature_smoothing=0).dense_for(DenseConfig()).signature_smoothing == 0
     shape = prepare_shape(figure(subdivisions=3))
-    default = point_signature(shape, DarcyanConfig().dense)
+    default = point_signature(shape, DarcyanConfig().dense_for())
     assert np.array_equal(default, point_signature(shape, DenseConfig()))
-    raw = point_signature(shape, DarcyanConfig(curvature_smoothing=0).dense)
+    raw = point_signature(shape, DarcyanConfig(curvature_smoothing=0).dense_for())
     assert raw.shape == default.shape and not np.allclose(raw, default)
     assert dataclasses.replace(DenseConfig(), signature_smoothing=0) != DenseConfig()

@@ -100,3 +100,25 @@ def test_limits_set_in_two_threads_are_restored_when_both_leave():
     for worker in workers:
         worker.join()
     assert blas_threads() == before and os.environ.get("OMP_NUM_THREADS") == omp
+
+
+def test_own_threads_split_searches_into_the_same_blocks():
+    """darcyan's own threads (map_blocks) give the results of the blocks in order, the same bits
+    as one thread; with BLAS threads other than 1 they are one (no oversubscription)."""
+    import numpy as np
+
+    from darcyan.geometry.knn import nearest_rows
+    from darcyan.parallel import map_blocks, own_threads, set_threads
+
+    assert map_blocks(lambda x: x * x, list(range(10))) == [x * x for x in range(10)]
+    rng = np.random.default_rng(0)
+    reference, queries = rng.standard_normal((700, 20)), rng.standard_normal((1000, 20))
+    threaded = nearest_rows(reference, queries)
+    try:
+        set_threads(2)
+        assert own_threads() == 1
+        serial = nearest_rows(reference, queries)
+    finally:
+        set_threads(None)
+    exact = ((queries[:, None, :] - reference[None]) ** 2).sum(axis=2).argmin(axis=1)
+    assert np.array_equal(threaded, serial) and (threaded == exact).mean() > 0.99

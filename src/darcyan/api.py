@@ -167,7 +167,8 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
         targets: one target of those kinds, or a list of them.
         dense: also make each pair's dense map (``darcyan match --dense``).
         config: the method's settings (default :class:`~darcyan.config.DarcyanConfig`).
-        dense_config: the dense map's settings (default ``config.dense``).
+        dense_config: the dense map's settings (default ``config.dense``; either way with the
+            point signature's unset settings from ``config``, :meth:`DarcyanConfig.dense_for`).
         cache: keep and reuse shape descriptions and verifications on disk (``True``: the
             default cache, ``$DARCYAN_CACHE``; a :class:`~darcyan.io.cache.ShapeCache`; ``False``:
             none). Files only: shapes given in memory are described anew.
@@ -187,7 +188,7 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
             for a pair that gets no dense map.
     """
     config = DarcyanConfig() if config is None else config
-    dense_config = config.dense if dense_config is None else dense_config
+    dense_config = config.dense_for(dense_config)
     if isinstance(targets, (list, tuple)):
         targets = list(targets)
     else:

@@ -128,7 +128,7 @@ def cmd_match(args: argparse.Namespace) -> int:
     if args.dense:
 
         try:
-            dense_config = config.dense if args.ensemble is None else dataclasses.replace(config.dense,
+            dense_config = config.dense_for() if args.ensemble is None else dataclasses.replace(config.dense_for(),
                                                                                           ensemble=args.ensemble)
         except ConfigError as exc:
             raise ConfigError(f"--ensemble: {exc}") from None
@@ -199,11 +199,7 @@ def _say_dense(say, target: str, source: str, dense, shapes, truth, quiet: bool 
     from .dense.maps import UNMAPPED
 
     check = dense.check
-    verdict = _seed_verdict(check.verdict.as_dict())
-    if check.rescued_from is not None:
-        verdict = (f"alternative matching {check.seed} replaces the one the seeds' scores chose "
-                   f"({check.rescued_from}): the alignment could not follow that one's map")
-    say(f"dense map: {verdict}; orientation agreement {check.orientation:.2f} (1: kept, "
+    say(f"dense map: {_seed_verdict(check.verdict.as_dict())}; orientation agreement {check.orientation:.2f} (1: kept, "
         f"-1: mirrored), landmark distortion {check.distortion:.3f} sqrt(area)")
     if check.trusted:
         if not quiet:  # --quiet: warnings only

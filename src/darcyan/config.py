@@ -365,8 +365,9 @@ class DenseConfig:
         signature_lengths: diffusion lengths (sqrt(area)) of the mean curvature in that signature.
         signature_smoothing, signature_diffusion_steps: the Meyer curvatures' one-ring averagings and
             the diffusions' backward-Euler steps in that signature; ``None``: the describe stage's
-            (``curvature_smoothing`` and ``heat.diffusion_steps``), which :class:`DarcyanConfig`
-            writes into its ``dense`` section, so that a dense map follows the caller's settings.
+            (``curvature_smoothing`` and ``heat.diffusion_steps``), as
+            :meth:`DarcyanConfig.dense_for` fills them in, so that a dense map follows the
+            caller's settings.
         signature_weight: weight of the :func:`~darcyan.dense.signatures.point_signature` (each length divided by its
             standard deviation over both shapes) beside the other terms of the chosen seed's
             ZoomOut steps up to ``signature_until`` eigenfunctions (0: never). At the coarse sizes
@@ -392,10 +393,6 @@ class DenseConfig:
             (``MapCheck.residual``): right maps of every benchmark set stayed within 0.0116, and
             every wholly wrong map the other conditions trusted went beyond 0.0126
             (``docs/decisions/every-pair.md``).
-        rescue_seeds: when the alignment could not follow the chosen seed's map (its residual
-            above ``trust_residual``), the maps of up to this many other seeds (by signature
-            score) are made and aligned too, and the one with the least residual is kept (0:
-            never; ``docs/decisions/every-pair.md``).
         local_search_above: a target mesh with more vertices than this is searched coarse to
             fine for the final map (:func:`darcyan.geometry.knn.nearest_rows_near`: in cells of
             equal vertex count, as many as ZoomOut's samples, near the image's nearest cell)
@@ -480,7 +477,6 @@ class DenseConfig:
     seed_margin: float = 0.04
     trust_orientation: float = 0.3
     trust_residual: float = 0.012
-    rescue_seeds: int = 3
     local_search_above: int = 20000
     local_search_reach: int = 16
     local_search_guess: int = 4
@@ -515,7 +511,7 @@ class DenseConfig:
         if self.basis_start > self.basis_size:
             raise ConfigError(f"dense: basis_start ({self.basis_start}) exceeds basis_size ({self.basis_size})")
         for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "signature_until",
-                     "basis_margin", "margin_from", "alignment_rounds", "rescue_seeds"):
+                     "basis_margin", "margin_from", "alignment_rounds"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 0:
                 raise ConfigError(f"dense: {name} must be a non-negative integer, got {value!r}")
@@ -679,13 +675,17 @@ class DarcyanConfig:
                 object.__setattr__(self, name, value)
             if not isinstance(value, kind):
                 raise ConfigError(f"config: {name} must be a {kind.__name__}, got {value!r}")
-        # The dense map's point signature follows this config's curvature smoothing and diffusion
-        # unless its section says otherwise.
-        signature = {"signature_smoothing": self.curvature_smoothing,
-                     "signature_diffusion_steps": self.heat.diffusion_steps}
-        unset = {name: value for name, value in signature.items() if getattr(self.dense, name) is None}
-        if unset:
-            object.__setattr__(self, "dense", dataclasses.replace(self.dense, **unset))
+
+    def dense_for(self, section: "DenseConfig | None" = None) -> "DenseConfig":
+        """``section`` (default this config's ``dense``) as a dense map runs it: its unset
+        (``None``) point-signature settings taken from this config's ``curvature_smoothing`` and
+        ``heat.diffusion_steps``, so that a dense map follows the caller's description settings
+        (however this config was made: ``replace``, ``updated``, a ``--config`` file)."""
+        section = self.dense if section is None else section
+        derived = {"signature_smoothing": self.curvature_smoothing,
+                   "signature_diffusion_steps": self.heat.diffusion_steps}
+        unset = {name: value for name, value in derived.items() if getattr(section, name) is None}
+        return dataclasses.replace(section, **unset) if unset else section
 
     def replace(self, **changes) -> "DarcyanConfig":
         """A copy with some fields changed (validated again)."""

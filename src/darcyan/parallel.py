@@ -87,8 +87,9 @@ def _one_thread() -> None:
 def own_threads() -> int:
     """How many threads darcyan's own block-wise loops use (:func:`map_blocks`): the cores this
     process may run on (at most :data:`MAX_OWN_THREADS`), 1 inside a worker of
-    :func:`process_map`, whose workers already fill the cores."""
-    if _in_worker["value"]:
+    :func:`process_map`, whose workers already fill the cores, and 1 when the BLAS threads are
+    not 1 (:func:`set_threads`: several BLAS threads per block would oversubscribe the cores)."""
+    if _in_worker["value"] or get_threads() != 1:
         return 1
     try:
         cores = len(os.sched_getaffinity(0))

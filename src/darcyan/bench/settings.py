@@ -39,7 +39,7 @@ class BenchSettings:
         import dataclasses
 
         return {"samples": self.dense_samples, "seed": self.dense_seed,
-                "config": dataclasses.asdict(self.config.dense),
+                "config": dataclasses.asdict(self.config.dense_for()),
                 "pyfm": dataclasses.asdict(pyfm.DENSE_PIPELINE)}
 
     def as_dict(self) -> dict:

@@ -304,7 +304,7 @@ def _verified(job: dict, target: Shape, correspondence) -> tuple:
 
     try:
         chosen, about = verified_file_matches(job["source_path"], job["target_path"], correspondence, shapes,
-                                              settings.config, settings.config.dense, settings.repair,
+                                              settings.config, settings.config.dense_for(), settings.repair,
                                               _cache_of(job))
     except DENSE_FAILURES as exc:
         return correspondence, {"verify_failed": str(exc) if isinstance(exc, DarcyanError)
@@ -367,7 +367,7 @@ def _dense_records(job: dict, target: Shape) -> list:
                                               settings.config)
                 info["matches"] = len(correspondence)
                 start = time.perf_counter()  # the dense stage only
-                result = dense_map(source, target, correspondence, settings.config.dense)
+                result = dense_map(source, target, correspondence, settings.config.dense_for())
             else:
                 result = pyfm_own_map(source.mesh, target.mesh, source.n_input_vertices)
             seconds = time.perf_counter() - start

@@ -64,9 +64,6 @@ class MapCheck:
         residual: how far the alignment's as-rigid-as-possible deformation of the source stayed
             from the images it was pulled towards (sqrt(area) units; NaN without alignment;
             :class:`~darcyan.dense.alignment.Alignment`).
-        rescued_from: the rank of the seed the signature chose when the alignment could not
-            follow its map and another seed's map was taken instead (``DenseConfig.rescue_seeds``);
-            ``None`` otherwise.
     """
 
     orientation: float
@@ -74,7 +71,6 @@ class MapCheck:
     verdict: SeedVerdict
     trusted: bool = False
     residual: float = float("nan")
-    rescued_from: int | None = None
 
     @property
     def seed(self) -> int:
@@ -87,10 +83,11 @@ class MapCheck:
         return self.verdict.start
 
     def as_dict(self) -> dict:
-        """Flat, as JSON records keep it: ``orientation``, ``distortion``, the verdict's fields
-        and ``trusted``."""
+        """Flat, as JSON records keep it: ``orientation``, ``distortion``, the verdict's fields,
+        ``trusted`` and ``residual`` (``None`` for NaN)."""
+        residual = None if np.isnan(self.residual) else self.residual  # JSON has no NaN
         return {"orientation": self.orientation, "distortion": self.distortion, **self.verdict.as_dict(),
-                "trusted": self.trusted, "residual": self.residual, "rescued_from": self.rescued_from}
+                "trusted": self.trusted, "residual": residual}
 
 
 @dataclass
@@ -145,7 +142,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     seed, seeds = choice.seed, choice.seeds
     mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
     t = time.perf_counter()
-    residual, rescued_from = float("nan"), None
+    residual = float("nan")
     if config.method == "pyfm":
         say("pyfm")
         local = pyfm_point_map(mesh_1, mesh_2, DENSE_PIPELINE, seed.source, seed.target)
@@ -160,21 +157,12 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             alignment = align(shape_1, shape_2, local, config, seed.fields_1, seed.fields_2)
             local, residual = alignment.map_12, alignment.residual
             timings["alignment"] = time.perf_counter() - t
-            if residual > config.trust_residual and config.rescue_seeds > 0 and len(seeds) > 1:
-                say("other seeds (the alignment could not follow the map)")
-                t = time.perf_counter()
-                chosen_rank = seed.rank
-                seed, local, residual = _rescued(shape_1, shape_2, correspondence, config, choice, seed, local,
-                                                 residual)
-                rescued_from = chosen_rank if seed.rank != chosen_rank else None
-                timings["rescue"] = time.perf_counter() - t
     src, tgt = seed.source, seed.target
     fields_1, fields_2, turns_1, turns_2 = seed.fields_1, seed.fields_2, seed.turns_1, seed.turns_2
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([mesh_1.input_index[src], mesh_2.input_index[tgt]], axis=1)
     orientation, distortion = map_check(shape_1, local, fields_1, fields_2, turns_1, turns_2)
-    check = MapCheck(orientation, distortion, check_of_seeds(seed, seeds, config.seed_margin), residual=residual,
-                     rescued_from=rescued_from)
+    check = MapCheck(orientation, distortion, check_of_seeds(seed, seeds, config.seed_margin), residual=residual)
     check = dataclasses.replace(check, trusted=trusted(check, correspondence, config))
     return DenseMap(target, landmarks, timings, check)
 
@@ -207,34 +195,6 @@ def _zoomout_map(shape_1, shape_2, seed, config: DenseConfig, samples: tuple, ba
         maps.append(read_out_map(shape_2, basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, sample_2,
                                  steady_1, steady_2, sample_1, mesh_1.vertices))
     return consensus_map(mesh_2.vertices, maps)
-
-
-def _rescued(shape_1, shape_2, correspondence, config: DenseConfig, choice, seed, local: np.ndarray,
-             residual: float) -> tuple:
-    """``(seed, map, residual)``: when the alignment could not follow the chosen seed's map (its
-    residual above ``config.trust_residual``), the map of each of the next ``config.rescue_seeds``
-    seeds by signature score is made and aligned too, and the one with the least residual kept
-    (the chosen seed's own, unless another does better): a wrong matching the sparse stage was
-    sure of, which the seeds' scores did not overturn, yields a map no rigid deformation follows,
-    and a right one among its alternatives one that it does (``docs/decisions/every-pair.md``)."""
-    from .landmarks import landmark_set
-    from .seeds import Seed, matching_of_seed
-
-    others = sorted((s for s in choice.seeds if s.rank != seed.rank and s.start == "matches"),
-                    key=lambda s: s.signature)[:config.rescue_seeds]
-    best = (residual, seed, local)
-    fields: tuple = ({}, {})
-    for other in others:
-        if other.fields_1 is None:  # let go of when it lost: its landmarks again
-            landmarks = landmark_set(shape_1, shape_2, matching_of_seed(correspondence, other.rank), config, fields)
-            if landmarks is None:
-                continue
-            other = Seed(other.rank, *landmarks, other.signature)
-        mapped = _zoomout_map(shape_1, shape_2, other, config, choice.samples, choice.bases)
-        alignment = align(shape_1, shape_2, mapped, config, other.fields_1, other.fields_2)
-        if alignment.residual < best[0]:
-            best = (alignment.residual, other, alignment.map_12)
-    return best[1], best[2], best[0]
 
 
 def shape_operators(shape, config: DenseConfig = DenseConfig()) -> None:

@@ -142,6 +142,8 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
     around = tree.query(positions[coarse], k=min(reach, len(coarse)))[1].reshape(len(coarse), -1)
     by_cell = np.argsort(cell, kind="stable")
     bounds = np.searchsorted(cell[by_cell], np.arange(len(coarse) + 1))
+    if guess is not None and len(guess) and (np.min(guess) < 0 or np.max(guess) >= len(coarse)):
+        raise ValueError(f"nearest_rows_near: a guess outside the {len(coarse)} coarse samples")
     nearest_sample = nearest_rows(reference[coarse], queries) if guess is None else \
         _nearest_around(reference[coarse], queries, np.asarray(guess, dtype=np.int64),
                         tree.query(positions[coarse], k=min(guess_reach or reach, len(coarse)))[1].reshape(len(coarse), -1))

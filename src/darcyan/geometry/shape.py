@@ -102,12 +102,14 @@ class Shape:
         return self._once(("spectrum", k, tol, shift, laplacian),
                           lambda: laplace_beltrami_spectrum(self.mesh, k, laplacian, tol, shift))
 
-    def smooth_basis(self, k: int, proxy_vertices: int = 0, tol: float = 0.0, shift: float = SHIFT) -> np.ndarray:
+    def smooth_basis(self, k: int, proxy_vertices: int = 0, tol: float = 0.0, shift: float = SHIFT):
         """``(n, k)`` the ``k`` first Laplace-Beltrami eigenfunctions at the vertices. On a mesh
         with more than twice ``proxy_vertices`` vertices they are computed on its coarse
         :meth:`proxy` and interpolated (smooth functions lose nothing there; the eigensolver on
-        50k vertices takes tens of seconds), and are then not mass-orthonormal. ``tol``: the
-        eigensolver's relative accuracy (0: machine precision)."""
+        50k vertices takes tens of seconds), and are then not mass-orthonormal, and not an
+        ndarray but :class:`~darcyan.geometry.proxy.InterpolatedRows`, interpolated as rows are
+        read (index it first: ``basis[rows, :k]``; ``np.asarray(basis)`` makes the whole array).
+        ``tol``: the eigensolver's relative accuracy (0: machine precision)."""
         return self.smooth_spectrum(k, proxy_vertices, tol, shift).vectors
 
     def smooth_spectrum(self, k: int, proxy_vertices: int = 0, tol: float = 0.0, shift: float = SHIFT) -> Spectrum:

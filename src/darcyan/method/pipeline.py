@@ -407,6 +407,9 @@ def _prepared(task: tuple) -> tuple:
         shape = prepare_shape(load_mesh(path), config, repair)
         arrays = analyze_shape(shape, config).description.arrays() if describe else None
     said = [str(w.message) for w in caught if issubclass(w.category, MeshWarning)]
+    for w in caught:  # the others (a library's own) are said here, in whichever process
+        if not issubclass(w.category, MeshWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if extra is not None:
         extra(shape)
     return arrays, said, shape
