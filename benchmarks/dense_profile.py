@@ -41,6 +41,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from speed import _peak_mb, _reset_peak  # benchmarks/speed.py: the same high-water mark, reset alike
+
 REPO = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("DARCYAN_DATA", REPO.parent / "shared" / "data"))
 
@@ -53,22 +55,6 @@ PAIRS = {
 }
 STAGES = ("describe", "match", "basis", "landmarks", "zoomout", "alignment", "write")
 MB = 1024.0 * 1024.0
-
-
-def _peak_mb() -> float:
-    with open("/proc/self/status") as fh:
-        for line in fh:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024.0
-    return float("nan")
-
-
-def _reset_peak() -> None:
-    try:
-        with open("/proc/self/clear_refs", "w") as fh:
-            fh.write("5")
-    except OSError:
-        pass
 
 
 def child(source: str, target: str, dense: bool, output: str) -> dict:

@@ -23,13 +23,19 @@ def main(argv: list | None = None) -> int:
     parser.add_argument("target")
     parser.add_argument("-o", "--output", type=Path, required=True)
     args = parser.parse_args(argv)
+    from darcyan.api import write_file
     from darcyan.dense.maps import dense_map_to_csv, pyfm_own_map
+    from darcyan.errors import DarcyanError
     from darcyan.method.pipeline import load_shape
 
-    shape_1, shape_2 = load_shape(args.source), load_shape(args.target)
-    # pyFM as its users run it: the libraries' own thread pools
-    made = pyfm_own_map(shape_1.mesh, shape_2.mesh, shape_1.n_input_vertices)
-    args.output.write_text(dense_map_to_csv(made.target))
+    try:
+        shape_1, shape_2 = load_shape(args.source), load_shape(args.target)
+        # pyFM as its users run it: the libraries' own thread pools
+        made = pyfm_own_map(shape_1.mesh, shape_2.mesh, shape_1.n_input_vertices)
+        write_file(dense_map_to_csv(made.target), args.output)
+    except DarcyanError as exc:  # a bad file or an unwritable output: one line
+        print(f"pyfm_pair.py: error: {exc}", file=sys.stderr)
+        return 2
     return 0
 
 

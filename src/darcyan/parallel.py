@@ -101,10 +101,10 @@ def own_threads() -> int:
 def map_blocks(function, blocks: list) -> list:
     """``[function(block) for block in blocks]``, computed on up to :func:`own_threads` threads
     (in order; each block's result is the same bits whichever thread computes it)."""
-    threads = min(own_threads(), len(blocks))
-    if threads <= 1:
+    threads = own_threads()
+    if threads <= 1 or len(blocks) <= 1:
         return [function(block) for block in blocks]
-    return list(_thread_pool(own_threads()).map(function, blocks))
+    return list(_thread_pool(threads).map(function, blocks))
 
 
 def _thread_pool(threads: int):

@@ -337,20 +337,7 @@ def describe_shapes(sources: list, config: DarcyanConfig = DarcyanConfig(), repa
     todo = [i for i, r in enumerate(results) if r is None]
     if jobs <= 1 or len(todo) <= 1:
         return [r if r is not None else describe_shape(p, config, repair, cache) for r, p in zip(results, paths)]
-    tasks = [(paths[i], config, repair) for i in todo]
-    if len(todo) <= jobs:  # this process takes the first file, workers the others (as describe_and_prepare)
-        made = _beside_workers(_describe_arrays, tasks)
-    else:
-        import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the workers fork)
-
-        made = list(process_map(_describe_arrays, tasks, jobs, ordered=True))
-    for i, (arrays, said) in zip(todo, made):
-        for message in said:
-            warnings.warn(message, MeshWarning, stacklevel=2)
-        if cache is not None:
-            cache.save(keys[i], {**arrays, "warnings": np.array(said, dtype=str)})
-        results[i] = _from_arrays(paths[i], arrays)
-    return results
+    return [described for described, _ in _describe_files(paths, keys, results, config, repair, cache, jobs)]
 
 
 @owns_threads
@@ -367,25 +354,40 @@ def describe_and_prepare(sources: list, config: DarcyanConfig = DarcyanConfig(),
     paths = [Path(s) for s in sources]
     keys = [_cache_key(cache, p, config, repair) for p in paths]
     results = [_cached(cache, k, p) for k, p in zip(keys, paths)]
-    tasks = [(path, config, repair, described is None, extra) for path, described in zip(paths, results)]
-    if jobs > 1 and 1 < len(paths) <= jobs:
-        made = _beside_workers(_prepared, tasks)
-    elif jobs > 1 and len(paths) > 1:
-        import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the workers fork)
+    return _describe_files(paths, keys, results, config, repair, cache, jobs, keep_shapes=True, extra=extra)
 
-        made = list(process_map(_prepared, tasks, jobs, ordered=True))
-    else:
-        made = [_prepared(task) for task in tasks]
-    out = []
-    for i, (arrays, said, shape) in enumerate(made):
+
+def _describe_files(paths: list, keys: list, results: list, config: DarcyanConfig, repair: bool, cache,
+                    jobs: int, keep_shapes: bool = False, extra=None) -> list:
+    """``[(description, shape or None)]`` of :func:`describe_shapes` and :func:`describe_and_prepare`:
+    the files whose description ``results`` lacks (``None``) described, and, with ``keep_shapes``,
+    every file prepared (``extra(shape)`` called on it) and its shape returned; the work spread
+    over processes by :func:`_across_processes`, the new descriptions saved under ``keys``."""
+    run = [i for i, described in enumerate(results) if keep_shapes or described is None]
+    tasks = [(paths[i], config, repair, results[i] is None, keep_shapes, extra) for i in run]
+    shapes = [None] * len(paths)
+    for i, (arrays, said, shape) in zip(run, _across_processes(_prepared, tasks, jobs)):
+        shapes[i] = shape
         if results[i] is None:
             for message in said:
-                warnings.warn(message, MeshWarning, stacklevel=2)
+                warnings.warn(message, MeshWarning, stacklevel=3)
             if cache is not None:
                 cache.save(keys[i], {**arrays, "warnings": np.array(said, dtype=str)})
             results[i] = _from_arrays(paths[i], arrays)
-        out.append((results[i], shape))
-    return out
+    return list(zip(results, shapes))
+
+
+def _across_processes(function, tasks: list, jobs: int) -> list:
+    """``[function(task) for task in tasks]`` in order: here with ``jobs`` 1 or a single task;
+    this process beside workers when the tasks fit in ``jobs`` (:func:`_beside_workers`); else
+    in ``jobs`` worker processes."""
+    if jobs <= 1 or len(tasks) <= 1:
+        return [function(task) for task in tasks]
+    if len(tasks) <= jobs:
+        return _beside_workers(function, tasks)
+    import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the workers fork)
+
+    return list(process_map(function, tasks, jobs, ordered=True))
 
 
 def _beside_workers(function, tasks: list) -> list:
@@ -399,9 +401,10 @@ def _beside_workers(function, tasks: list) -> list:
 
 
 def _prepared(task: tuple) -> tuple:
-    """``(arrays, warnings, shape)`` of :func:`describe_and_prepare` for one file (``arrays``:
-    ``None`` when its description was not asked for); in a worker process or not."""
-    path, config, repair, describe, extra = task
+    """``(arrays, warnings, shape)`` of :func:`_describe_files` for one file (``arrays``: ``None``
+    when its description was not asked for; ``shape``: ``None`` unless kept, so that a worker
+    sends back only the description); in a worker process or not."""
+    path, config, repair, describe, keep_shape, extra = task
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", MeshWarning)
         shape = prepare_shape(load_mesh(path), config, repair)
@@ -412,16 +415,7 @@ def _prepared(task: tuple) -> tuple:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if extra is not None:
         extra(shape)
-    return arrays, said, shape
-
-
-def _describe_arrays(task: tuple) -> tuple:
-    """In a worker process: the cacheable arrays of one file and the mesh warnings it raised."""
-    path, config, repair = task
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", MeshWarning)
-        arrays = analyze_mesh(load_mesh(path), config, repair).description.arrays()
-    return arrays, [str(w.message) for w in caught if issubclass(w.category, MeshWarning)]
+    return arrays, said, shape if keep_shape else None
 
 
 def _cache_key(cache: ShapeCache | None, path: Path, config: DarcyanConfig, repair: bool) -> str | None:
