@@ -20,8 +20,9 @@ second run into the same ``--out`` reuses the copies and the finished pairs:
   vertices as the input: another meshing of the same surface, as a scanner's software writes it.
   Each ground-truth sample moves to the nearest vertex of the copy.
 - ``marching-cubes`` and ``glued``: the surface rebuilt as a scan reconstruction would, by
-  marching cubes (scikit-image) on the distance to the surface, at the level of an offset, then
-  decimated to the input's vertex count (fast-simplification); the outer sheet is kept. At
+  marching cubes (scikit-image) on the signed distance to the surface (libigl, the sign by the
+  winding number), at the level of an offset, then decimated to the input's vertex count
+  (libigl's QSlim, which keeps the topology); the outer sheet is kept. At
   ``marching-cubes`` the grid is fine and the offset small (0.004 sqrt(area)): a new meshing of
   the same surface. At ``glued`` the offset (0.012 sqrt(area), about 2 cm on a person) fuses the
   parts that nearly touch, hands on hips, thighs, a tail on a leg: topological noise, as in
@@ -63,7 +64,6 @@ CONDITIONS = DEFAULT_CONDITIONS + ("subdivided", "holes", "inside-out", "isotrop
 REMESH_ITERATIONS = 10  # of remesh_botsch (its default)
 # Marching cubes: (grid step, offset of the level set), both in sqrt(area) units of the input.
 LEVEL_SETS = {"marching-cubes": (0.006, 0.004), "glued": (0.01, 0.012)}
-SURFACE_SAMPLES = 300_000  # points on the input whose distance field is cut
 HOLES = 3  # faces taken out of each shape of the holes and inside-out copies
 
 
@@ -100,7 +100,7 @@ def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0)
             mesh = Mesh(v, without_nonmanifold_edges(f))
             remap = cKDTree(mesh.vertices).query(load_mesh(path).vertices)[1]
         elif condition in LEVEL_SETS:
-            mesh = level_set_copy(mesh, *LEVEL_SETS[condition], seed=seed)
+            mesh = level_set_copy(mesh, *LEVEL_SETS[condition])
             remap = cKDTree(mesh.vertices).query(load_mesh(path).vertices)[1]
         elif condition in ("holes", "inside-out"):
             faces = mesh.faces[:, ::-1] if number % 2 and condition == "inside-out" else mesh.faces
@@ -117,45 +117,39 @@ def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0)
                 np.savetxt(target / "corres" / gt.name, remap[idx] + 1, fmt="%d")
 
 
-def level_set_copy(mesh: Mesh, step: float, offset: float, seed: int = 0) -> Mesh:
+def level_set_copy(mesh: Mesh, step: float, offset: float) -> Mesh:
     """The surface at distance ``offset`` outside ``mesh`` (marching cubes on a grid of ``step``
     over its signed distance; both in sqrt(area) units), decimated to ``mesh``'s vertex count.
-    Parts of ``mesh`` closer than twice the offset are one part of the copy. The distance is
-    signed (negative inside), so that the level set is one outer sheet: an unsigned distance also
-    has a sheet inside every part thicker than twice the offset, which a coarse grid merges with
-    the outer one where the part is thin (a copy with half the original's volume)."""
-    import fast_simplification
+    Parts of ``mesh`` closer than twice the offset are one part of the copy; elsewhere the copy
+    keeps the input's topology. The distance is libigl's exact distance to the triangles, its
+    sign the generalized winding number (the input is closed): the side of the nearest sample's
+    normal, which the first copies used, is wrong near thin or folded parts, and those copies
+    had up to 40 handles the input has not (``docs/decisions/every-pair.md``). The decimation is
+    libigl's QSlim, whose edge collapses keep the topology (fast-simplification's added up to 11
+    handles more)."""
+    import igl
     import trimesh
-    from scipy import ndimage
     from skimage.measure import marching_cubes
 
-    surface = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
-    scale = np.sqrt(surface.area)
+    vertices, faces = mesh.vertices.astype(np.float64), mesh.faces.astype(np.int64)
+    scale = np.sqrt(mesh.area())
     step, offset = step * scale, offset * scale
-    points, face = trimesh.sample.sample_surface(surface, SURFACE_SAMPLES, seed=seed)
-    normals = surface.face_normals[face]
-    low = mesh.vertices.min(axis=0) - offset - 3 * step
-    axes = [np.arange(a, b + step, step) for a, b in zip(low, mesh.vertices.max(axis=0) + offset + 3 * step)]
-    shape = [len(a) for a in axes]
-    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     far = offset + 3 * step  # farther grid points only need their side of the surface
-    distance, nearest = cKDTree(points).query(grid, distance_upper_bound=far, workers=-1)
-    near = np.isfinite(distance)
-    side = np.ones(len(grid))
-    towards = np.einsum("ij,ij->i", grid[near] - points[nearest[near]], normals[nearest[near]])
-    side[near] = np.where(towards < 0, -1.0, 1.0)  # the nearest sample's outward normal
-    # Far points lie outside when the far region they belong to reaches the grid's border.
-    labels, _ = ndimage.label((~near).reshape(shape))
-    border = np.unique(np.concatenate([labels[[0, -1]].ravel(), labels[:, [0, -1]].ravel(),
-                                       labels[:, :, [0, -1]].ravel()]))
-    inside = (~near) & ~np.isin(labels.ravel(), border[border > 0])
-    side[inside] = -1.0
-    signed = (side * np.where(near, distance, far)).reshape(shape)
-    vertices, faces, _, _ = marching_cubes(signed, level=offset, spacing=(step,) * 3)
-    level = trimesh.Trimesh(vertices + low, faces, process=True)
+    low = vertices.min(axis=0) - far
+    axes = [np.arange(a, b + step, step) for a, b in zip(low, vertices.max(axis=0) + far)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    signed, _, _, _ = igl.signed_distance(grid, vertices, faces, lower_bound=-far, upper_bound=far,
+                                          sign_type=igl.SignedDistanceType.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER)
+    signed = np.clip(signed, -far, far).reshape([len(a) for a in axes])
+    level_vertices, level_faces, _, _ = marching_cubes(signed, level=offset, spacing=(step,) * 3)
+    level = trimesh.Trimesh(level_vertices + low, level_faces, process=True)
     outer = max(level.split(only_watertight=False), key=lambda part: part.area)  # bubbles, if any, left out
-    v, f = fast_simplification.simplify(outer.vertices, outer.faces, target_count=2 * mesh.n_vertices)
-    return Mesh(v, without_nonmanifold_edges(f))
+    v, f, _, _ = igl.qslim(np.asfortranarray(outer.vertices, dtype=np.float64),
+                           np.asfortranarray(outer.faces, dtype=np.int32), 2 * mesh.n_vertices - 4)
+    used = np.unique(f)
+    renumber = np.full(len(v), -1, dtype=np.int64)
+    renumber[used] = np.arange(len(used))
+    return Mesh(v[used], renumber[f])
 
 
 def spread_faces(mesh: Mesh, count: int, rng) -> np.ndarray:

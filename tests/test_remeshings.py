@@ -66,3 +66,41 @@ def test_subdivided_copy_keeps_the_surface_and_the_numbering(robustness, dataset
     assert gaps.max() < 1e-6  # the OFF file rounds coordinates; edges are about 0.05 long
     assert np.isclose(mesh.area(), original.area())
     assert np.array_equal(truth, np.loadtxt(dataset / "corres" / "egg.vts", dtype=np.int64) - 1)
+
+
+def _euler(mesh: Mesh) -> int:
+    edges = np.unique(np.sort(mesh.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    return mesh.n_vertices - len(edges) + mesh.n_faces
+
+
+def test_marching_cubes_copy_of_a_thin_part_is_one_closed_sphere_at_the_offset(robustness):
+    # A disc 3% as thick as it is wide: where a part is this thin, the side of the nearest
+    # sample's normal (the first copies' sign) put grid points on the wrong side and cut handles.
+    sphere = synthetic.icosphere(subdivisions=4)
+    disc = Mesh(sphere.vertices * [1.5, 1.0, 0.03], sphere.faces)
+    step, offset = robustness.LEVEL_SETS["marching-cubes"]
+    copy_ = robustness.level_set_copy(disc, step, offset)
+    assert _euler(copy_) == 2  # genus 0, closed
+    assert abs(copy_.n_vertices - disc.n_vertices) <= 0.01 * disc.n_vertices
+    import igl
+
+    distance = igl.signed_distance(copy_.vertices, disc.vertices, disc.faces.astype(np.int64))[0]
+    scale = np.sqrt(disc.area())
+    assert np.all(distance > 0)  # outside the input
+    assert abs(np.median(distance) / scale - offset) < step  # at the offset, within a grid step
+
+
+def test_glued_copy_fuses_parts_closer_than_twice_the_offset(robustness):
+    step, offset = robustness.LEVEL_SETS["glued"]
+    sphere = synthetic.icosphere(subdivisions=3)
+    area_one = np.sqrt(2 * sphere.area())  # two spheres: the pair's sqrt(area)
+    for gap, parts in ((0.5 * offset, 1), (4 * offset, None)):
+        shift = 2.0 + gap * area_one
+        pair = Mesh(np.vstack([sphere.vertices, sphere.vertices + [shift, 0, 0]]),
+                    np.vstack([sphere.faces, sphere.faces + sphere.n_vertices]))
+        copy_ = robustness.level_set_copy(pair, step, offset)
+        spans = copy_.vertices[:, 0].max() - copy_.vertices[:, 0].min()
+        if parts == 1:  # one surface around both: it spans both spheres
+            assert spans > shift + 1.5 and _euler(copy_) == 2
+        else:  # the copy keeps the larger part only: one sphere
+            assert spans < 2.5
