@@ -93,3 +93,18 @@ def test_dense_maps_of_targets_with_one_name_are_refused_before_any_work(capsys,
     blocker.write_text("")
     code, _, err = run(capsys, "match", figures[0], figures[1], figures[2], "--dense", "-o", blocker)
     assert code == 2 and "cannot make the folder" in err
+
+
+def test_the_seed_verdict_says_how_the_map_was_started():
+    from darcyan.cli import _seed_verdict
+    from darcyan.dense.seeds import seed_check
+
+    kept = seed_check(0, {0: 0.10, 1: 0.20, 4: 0.099}, 0.04, rival=4).as_dict()
+    assert "hold against their alternatives" in _seed_verdict(kept)
+    assert "weighed against it and did not do clearly better" in _seed_verdict(kept)
+    alone = seed_check(0, {0: 0.10, 1: 0.099}, 0.04, rival=1).as_dict()  # one matching and the rival
+    assert _seed_verdict(alone).startswith("the feature matches, nothing to weigh them against; a start without")
+    taken = seed_check(4, {0: 0.10, 1: 0.20, 4: 0.05}, 0.04, "spectral", "axes ++", rival=4).as_dict()
+    assert "the map from them was not trusted" in _seed_verdict(taken) and "axes ++" in _seed_verdict(taken)
+    fallback = seed_check(2, {2: 0.05}, 0.04, "spectral", "spectral +-+-").as_dict()
+    assert "fewer than 3 consistent ones" in _seed_verdict(fallback) and "rival" not in fallback

@@ -1,6 +1,8 @@
 """The landmark-free start (:mod:`darcyan.dense.start`): every pair gets a map, even when the
 sparse matches give fewer than three consistent landmarks."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from conftest import DENSE_MAX_MEAN, DENSE_MIN_RATE, DENSE_SCORED, FAST_DENSE, moved_and_mirrored_tip_fields, tip_correspondence
@@ -67,3 +69,36 @@ def test_cli_dense_truth_prints_the_dense_score(small_pose_files, capsys, tmp_pa
     within, total = (int(x) for x in line.split("dense map: ")[1].split(" vertices")[0].split(" of "))
     assert total > 0 and within / total >= DENSE_MIN_RATE and "mean error" in line
     assert "dense map trusted" in err  # said of every map, trusted or not
+
+
+@pytest.mark.slow
+def test_a_wrong_matching_gives_way_to_the_start_without_landmarks(figure_pair):
+    """Every tip matched to the next one round (all kept: ``landmarks="all"``): the map from
+    them is not trusted, the start without landmarks competes, scores lower, and its map is
+    right (identity truth); without the rival the map is wholly wrong, so the test can fail."""
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    wrong = tip_correspondence(tips, np.roll(tips, -1))
+    config = dataclasses.replace(FAST_DENSE, landmarks="all")
+
+    def rate(result):
+        return evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED,
+                              target_solver=shape_2.solver).rate
+
+    result = dense_map(shape_1, shape_2, wrong, config)
+    assert result.check.start == "spectral" and "rival start" in result.timings
+    verdict = result.check.verdict
+    assert verdict.seed == 1 and verdict.signatures[1] < (1 - config.seed_margin) * verdict.signatures[0]
+    assert rate(result) >= DENSE_MIN_RATE and not result.check.trusted
+    alone = dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, start_in_doubt=False))
+    assert alone.check.start == "matches" and not alone.check.trusted and rate(alone) < 0.2
+
+
+@pytest.mark.slow
+def test_a_trusted_map_is_not_put_in_competition(figure_pair):
+    """The figure's own matches give a trusted map: the start without landmarks is not tried."""
+    shape_1, shape_2, matches = figure_pair
+    result = dense_map(shape_1, shape_2, matches, FAST_DENSE)
+    assert result.check.trusted and result.check.start == "matches"
+    assert "rival start" not in result.timings
+    assert max(result.check.verdict.signatures) <= len(matches.alternatives)  # no rank past the matchings

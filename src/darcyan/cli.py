@@ -268,12 +268,18 @@ def _output_format(args: argparse.Namespace) -> str:
 def _seed_verdict(about: dict) -> str:
     """What the seed check (a :class:`~darcyan.dense.seeds.SeedVerdict` as a dict:
     ``DenseMap.check.verdict`` or ``verified_matches``' second result) decided."""
+    start_from = about.get("start_from", "the spectra")
+    if about.get("start") == "spectral" and about.get("rival") is not None:
+        return (f"started without the feature matches: the map from them was not trusted, and landmarks from a "
+                f"short map started from {start_from} keep the shapes' curvature clearly better")
     if about.get("start") == "spectral":
         return (f"started without the feature matches (fewer than 3 consistent ones): landmarks from a short map "
-                f"started from {about.get('start_from', 'the spectra')}")
-    if about["seeds"] == 1:
+                f"started from {start_from}")
+    lost = ("; a start without the feature matches was weighed against it and did not do clearly better"
+            if about.get("rival") is not None else "")
+    if about["seeds"] - (about.get("rival") is not None) == 1:  # the matchings' seeds, the rival aside
         return ("the feature matches, nothing to weigh them against" if about["seed"] == 0 else
-                f"alternative matching {about['seed']}: the feature matches have too few consistent matches")
+                f"alternative matching {about['seed']}: the feature matches have too few consistent matches") + lost
     if about["seed"] == 0:
         verdict = "the feature matches hold against their alternatives"
     elif 0 not in about["signatures"]:
@@ -282,7 +288,7 @@ def _seed_verdict(about: dict) -> str:
     else:
         verdict = (f"alternative matching {about['seed']} replaces the feature matches (its short dense map keeps "
                    f"the shapes' curvature clearly better)")
-    return verdict + ("" if about["clear"] else "; another candidate scores close: look at the matches (--plot)")
+    return verdict + lost + ("" if about["clear"] else "; another candidate scores close: look at the matches (--plot)")
 
 
 def _progress(args: argparse.Namespace):

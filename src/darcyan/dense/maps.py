@@ -37,7 +37,7 @@ from ..parallel import owns_threads
 from .alignment import align
 from .config import DenseConfig
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
-from .seeds import SeedVerdict, check_of_seeds, choose_seed
+from .seeds import SeedVerdict, check_of_seeds, choose_seed, rival_start, seed_check
 from .signatures import point_signature, signature_coordinates, signature_turn_coordinates
 from .zoomout import consensus_map, dense_eigenvalues, dense_spectrum, read_out_map, zoomout, zoomout_samples
 
@@ -139,32 +139,59 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     say = progress or (lambda stage: None)
     timings: dict = {}
     choice = choose_seed(shape_1, shape_2, correspondence, config, say, timings)
-    seed, seeds = choice.seed, choice.seeds
-    mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
+    seed = choice.seed
+    local, residual = _map_of_seed(shape_1, shape_2, seed, config, choice, say, timings)
+    check = _checked(shape_1, local, seed, check_of_seeds(seed, choice.seeds, config.seed_margin), residual,
+                     correspondence, config)
+    if not check.trusted and check.start == "matches" and config.start_in_doubt and config.method == "zoomout":
+        # The map from the matches is in doubt: the start without landmarks competes with its seed.
+        say("spectral start (the map from the matches is not trusted)")
+        t = time.perf_counter()
+        rival = rival_start(shape_1, shape_2, correspondence, config, choice)
+        timings["rival start"] = time.perf_counter() - t
+        if rival is not None:
+            rival_seed, rival_score, chosen_score = rival
+            scores = {**{s.rank: s.signature for s in choice.seeds}, seed.rank: chosen_score,
+                      rival_seed.rank: rival_score}
+            if rival_score < (1.0 - config.seed_margin) * chosen_score:
+                seed = rival_seed
+                local, residual = _map_of_seed(shape_1, shape_2, seed, config, choice, say, timings, "rival ")
+            verdict = seed_check(seed.rank, scores, config.seed_margin, seed.start, seed.start_from, rival_seed.rank)
+            check = _checked(shape_1, local, seed, verdict, residual, correspondence, config)
+    target = input_map(shape_1, shape_2, local)
+    landmarks = np.stack([shape_1.mesh.input_index[seed.source], shape_2.mesh.input_index[seed.target]], axis=1)
+    return DenseMap(target, landmarks, timings, check)
+
+
+def _map_of_seed(shape_1, shape_2, seed, config: DenseConfig, choice, say, timings: dict, stage: str = "") -> tuple:
+    """``(local (n1,), residual)``: the map from ``seed`` (prepared numbering; pyFM's, or
+    ZoomOut's then aligned) and the alignment's residual (NaN without it); each stage's seconds
+    in ``timings`` under ``stage`` + its name."""
     t = time.perf_counter()
     residual = float("nan")
     if config.method == "pyfm":
         say("pyfm")
-        local = pyfm_point_map(mesh_1, mesh_2, DENSE_PIPELINE, seed.source, seed.target)
-        timings["pyfm"] = time.perf_counter() - t
-    else:
-        say("zoomout")
-        local = _zoomout_map(shape_1, shape_2, seed, config, choice.samples, choice.bases)
-        timings["zoomout"] = time.perf_counter() - t
-        if config.alignment_rounds > 0:
-            say("alignment")
-            t = time.perf_counter()
-            alignment = align(shape_1, shape_2, local, config, seed.fields_1, seed.fields_2)
-            local, residual = alignment.map_12, alignment.residual
-            timings["alignment"] = time.perf_counter() - t
-    src, tgt = seed.source, seed.target
-    fields_1, fields_2, turns_1, turns_2 = seed.fields_1, seed.fields_2, seed.turns_1, seed.turns_2
-    target = input_map(shape_1, shape_2, local)
-    landmarks = np.stack([mesh_1.input_index[src], mesh_2.input_index[tgt]], axis=1)
-    orientation, distortion = map_check(shape_1, local, fields_1, fields_2, turns_1, turns_2)
-    check = MapCheck(orientation, distortion, check_of_seeds(seed, seeds, config.seed_margin), residual=residual)
-    check = dataclasses.replace(check, trusted=trusted(check, correspondence, config))
-    return DenseMap(target, landmarks, timings, check)
+        local = pyfm_point_map(shape_1.mesh, shape_2.mesh, DENSE_PIPELINE, seed.source, seed.target)
+        timings[stage + "pyfm"] = time.perf_counter() - t
+        return local, residual
+    say("zoomout")
+    local = _zoomout_map(shape_1, shape_2, seed, config, choice.samples, choice.bases)
+    timings[stage + "zoomout"] = time.perf_counter() - t
+    if config.alignment_rounds > 0:
+        say("alignment")
+        t = time.perf_counter()
+        alignment = align(shape_1, shape_2, local, config, seed.fields_1, seed.fields_2)
+        local, residual = alignment.map_12, alignment.residual
+        timings[stage + "alignment"] = time.perf_counter() - t
+    return local, residual
+
+
+def _checked(shape_1, local: np.ndarray, seed, verdict: SeedVerdict, residual: float, correspondence,
+             config: DenseConfig) -> MapCheck:
+    """The :class:`MapCheck` of the map ``local (n1,)`` from ``seed``, its trust decided."""
+    orientation, distortion = map_check(shape_1, local, seed.fields_1, seed.fields_2, seed.turns_1, seed.turns_2)
+    check = MapCheck(orientation, distortion, verdict, residual=residual)
+    return dataclasses.replace(check, trusted=trusted(check, correspondence, config))
 
 
 def _zoomout_map(shape_1, shape_2, seed, config: DenseConfig, samples: tuple, bases: tuple) -> np.ndarray:

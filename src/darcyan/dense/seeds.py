@@ -103,6 +103,9 @@ class SeedVerdict:
         start: how the map was started: ``"matches"``, or ``"spectral"`` when no matching had
             three consistent landmarks (:mod:`darcyan.dense.start`).
         start_from: with a spectral start, the short map whose landmarks it used.
+        rival: the rank of the start without landmarks when it competed with a map from the
+            matches that was not trusted (``DenseConfig.start_in_doubt``; its score in
+            ``signatures``), else ``None``.
     """
 
     seed: int
@@ -113,22 +116,26 @@ class SeedVerdict:
     clear: bool
     start: str = "matches"
     start_from: str = ""
+    rival: int | None = None
 
     def as_dict(self) -> dict:
-        """The fields as a dict (``start_from`` only when set), as JSON records keep them."""
+        """The fields as a dict (``start_from`` and ``rival`` only when set), as JSON records keep them."""
         fields = dataclasses.asdict(self)
         if not self.start_from:
             del fields["start_from"]
+        if self.rival is None:
+            del fields["rival"]
         return fields
 
 
-def seed_check(rank: int, signatures: dict, margin: float, start: str = "matches", start_from: str = "") -> SeedVerdict:
+def seed_check(rank: int, signatures: dict, margin: float, start: str = "matches", start_from: str = "",
+               rival: int | None = None) -> SeedVerdict:
     """The :class:`SeedVerdict` of the chosen seed's ``rank`` given every usable seed's score
     (``signatures``: rank -> score): ``clear`` when no other seed scores within ``margin``
     (relative) of it."""
     others = sorted(score for r, score in signatures.items() if r != rank)
     return SeedVerdict(rank, len(signatures), signatures[rank], others[0] if others else None, dict(signatures),
-                       bool(not others or signatures[rank] <= (1.0 - margin) * others[0]), start, start_from)
+                       bool(not others or signatures[rank] <= (1.0 - margin) * others[0]), start, start_from, rival)
 
 
 def check_of_seeds(seed, seeds: list, margin: float) -> SeedVerdict:
@@ -239,6 +246,21 @@ def _spectral_seeds(shape_1, shape_2, correspondence, config: DenseConfig, sampl
         return []
     rank = 1 + len(getattr(correspondence, "alternatives", ()))
     return [Seed(rank, *landmarks, matching.signature, start="spectral", start_from=matching.start)]
+
+
+def rival_start(shape_1, shape_2, correspondence, config: DenseConfig, choice: SeedChoice) -> tuple | None:
+    """The start without landmarks as a rival of ``choice.seed`` (a map from the matches in doubt):
+    ``(rival, rival_score, chosen_score)``, the :func:`_spectral_seeds` seed and both seeds'
+    signature scores by one short ZoomOut each from their landmark coordinates (the scoring of
+    the matchings' seeds; a single matching's seed was not scored), or ``None`` when the bases
+    are too small for the start."""
+    rivals = _spectral_seeds(shape_1, shape_2, correspondence, config, choice.samples, choice.bases, ({}, {}))
+    if not rivals:
+        return None
+    scoring = _SeedScoring(shape_1, shape_2, config, choice.samples, choice.bases)
+    rival, seed = rivals[0], choice.seed
+    chosen_score = seed.signature if len(choice.seeds) > 1 else scoring.score(seed.coords_1, seed.coords_2)
+    return rival, scoring.score(rival.coords_1, rival.coords_2), chosen_score
 
 
 def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple, bases: tuple,
