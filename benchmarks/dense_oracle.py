@@ -105,8 +105,13 @@ def score_pair(task: tuple) -> dict:
         made = dense_map(shape_1, shape_2, correspondence, config)
     except DENSE_FAILURES as exc:  # no dense map for this pair: reported, the others go on
         return {"pair": f"{source_name}->{target_name}", "group": group, "failed": str(exc)}
-    matchings = [correspondence] + list(correspondence.alternatives)
-    coords_1, coords_2 = landmark_coordinates(shape_1, shape_2, matchings[made.check.seed], config)
+    if made.check.start != "matches":  # a start without the matches: its landmarks are the map's
+        from types import SimpleNamespace
+
+        matching = SimpleNamespace(source_vertex=made.landmarks[:, 0], target_vertex=made.landmarks[:, 1])
+    else:
+        matching = ([correspondence] + list(correspondence.alternatives))[made.check.seed]
+    coords_1, coords_2 = landmark_coordinates(shape_1, shape_2, matching, config)
     source, target = true_pairs(shape_1, shape_2, truth)
     maps = {"default": made.target}
 

@@ -65,6 +65,9 @@ REMESH_ITERATIONS = 10  # of remesh_botsch (its default)
 # Marching cubes: (grid step, offset of the level set), both in sqrt(area) units of the input.
 LEVEL_SETS = {"marching-cubes": (0.006, 0.004), "glued": (0.01, 0.012)}
 HOLES = 3  # faces taken out of each shape of the holes and inside-out copies
+# Written in each copy's "done" file; a copy of another version is made again. 2: the level-set
+# copies by libigl's signed distance and QSlim (2026-12-06).
+COPIES_VERSION = "2"
 
 
 def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0) -> None:
@@ -134,19 +137,26 @@ def level_set_copy(mesh: Mesh, step: float, offset: float) -> Mesh:
     vertices, faces = mesh.vertices.astype(np.float64), mesh.faces.astype(np.int64)
     scale = np.sqrt(mesh.area())
     step, offset = step * scale, offset * scale
-    far = offset + 3 * step  # farther grid points only need their side of the surface
-    low = vertices.min(axis=0) - far
-    axes = [np.arange(a, b + step, step) for a, b in zip(low, vertices.max(axis=0) + far)]
+    margin = offset + 3 * step
+    low = vertices.min(axis=0) - margin
+    axes = [np.arange(a, b + step, step) for a, b in zip(low, vertices.max(axis=0) + margin)]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    signed, _, _, _ = igl.signed_distance(grid, vertices, faces, lower_bound=-far, upper_bound=far,
+    # No distance bounds: beyond them libigl returns NaN, sign and all.
+    signed, _, _, _ = igl.signed_distance(grid, vertices, faces,
                                           sign_type=igl.SignedDistanceType.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER)
-    signed = np.clip(signed, -far, far).reshape([len(a) for a in axes])
-    level_vertices, level_faces, _, _ = marching_cubes(signed, level=offset, spacing=(step,) * 3)
+    if not np.isfinite(signed).all():
+        raise ValueError(f"{mesh.name}: the signed distance is not finite at {int((~np.isfinite(signed)).sum())} grid points")
+    level_vertices, level_faces, _, _ = marching_cubes(signed.reshape([len(a) for a in axes]), level=offset,
+                                                       spacing=(step,) * 3)
     level = trimesh.Trimesh(level_vertices + low, level_faces, process=True)
     outer = max(level.split(only_watertight=False), key=lambda part: part.area)  # bubbles, if any, left out
+    manifold = without_nonmanifold_edges(np.asarray(outer.faces))  # QSlim needs a manifold mesh
+    count = 2 * mesh.n_vertices - 4  # faces of a closed genus-0 surface of the input's vertex count
     v, f, _, _ = igl.qslim(np.asfortranarray(outer.vertices, dtype=np.float64),
-                           np.asfortranarray(outer.faces, dtype=np.int32), 2 * mesh.n_vertices - 4)
-    used = np.unique(f)
+                           np.asfortranarray(manifold, dtype=np.int32), count)
+    if len(f) > count:
+        raise ValueError(f"{mesh.name}: QSlim stopped at {len(f)} faces, above {count}")
+    used = np.unique(f)  # QSlim returns only the vertices it kept; renumbered all the same, should it not
     renumber = np.full(len(v), -1, dtype=np.int64)
     renumber[used] = np.arange(len(used))
     return Mesh(v[used], renumber[f])
@@ -205,9 +215,11 @@ def main(argv=None) -> int:
     for condition in args.conditions:
         # The perturbed meshes are kept in --out, so that an interrupted run resumes.
         folder = Path(args.dataset) if condition == "clean" else out / "meshes" / condition
-        if condition != "clean" and not (folder / "done").exists():
+        # A copy made by another version of the generator is made again (see COPIES_VERSION).
+        done = folder / "done"
+        if condition != "clean" and (not done.exists() or done.read_text().strip() != COPIES_VERSION):
             perturbed_dataset(Path(args.dataset), folder, condition)
-            (folder / "done").touch()
+            done.write_text(COPIES_VERSION + "\n")
         # Decimation can leave duplicate faces: drop them as `--repair` would.
         result = run_bench(folder, out / condition, ("darcyan",), args.pairs, config=DarcyanConfig(),
                            jobs=args.jobs, resume=True, repair=condition in ("decimated", "isotropic") + tuple(LEVEL_SETS),

@@ -1,11 +1,12 @@
 """Is a dense map's ``trusted`` flag honest? Trusted against right, from ``darcyan bench --dense`` runs.
 
-Reads the ``pairs.jsonl`` of each bench output folder given and prints, per folder and pooled:
-the pairs, those with no map, those whose map collapsed (fewer than ``--right`` of the sampled
-vertices within 0.05: 80%) and those wholly wrong (at most 1%), the pooled share within 0.05 and
-mean geodesic error (x100, over mapped samples), how each map was started (``matches`` or
-``spectral``), and the table of trusted against right: a flag worth acting on marks no collapsed
-map trusted.
+Reads the ``pairs.jsonl`` of each bench output folder given and prints, per folder and pooled: the
+pairs, those with no map, those whose map collapsed (fewer than ``--right`` of the sampled vertices
+within 0.05: 80%) and those wholly wrong (at most 1%), the pooled share within 0.05 and mean
+geodesic error (x100, over mapped samples), how each map was started (``matches``, ``spectral`` when
+no matching gave three consistent landmarks, ``rival`` when the start without landmarks won over a
+map from the matches that was not trusted), and the table of trusted against right: a flag worth
+acting on marks no collapsed map trusted.
 
     python benchmarks/trust_table.py out/faust-glued out/tosca-glued [--right 0.8]
 """
@@ -41,7 +42,10 @@ def summary(records: list, right: float, residual_below: float | None = None) ->
     good = rates >= right
     starts: dict = {}
     for r in mapped:
-        start = r.get("check", {}).get("start", "matches")
+        check = r.get("check", {})
+        start = check.get("start", "matches")
+        if start == "spectral" and check.get("rival") is not None:
+            start = "rival"  # the start without landmarks, taken over a map from the matches in doubt
         starts[start] = starts.get(start, 0) + 1
     return {"pairs": len(records), "no map": len(records) - len(mapped), "collapsed": int((~good).sum()),
             "wholly wrong": int((rates <= 0.01).sum()), "within": within / samples if samples else float("nan"),

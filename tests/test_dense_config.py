@@ -36,3 +36,10 @@ def test_dense_config_rejects_bad_seed_settings():
 def test_bad_sampling_is_a_config_error():
     with pytest.raises(ConfigError, match="sampling"):
         DenseConfig(sampling="poisson")
+
+
+def test_start_in_doubt_is_true_or_false():
+    for bad in ("false", 0, None):
+        with pytest.raises(ConfigError, match="start_in_doubt must be true or false"):
+            DenseConfig(start_in_doubt=bad)
+    assert DenseConfig(start_in_doubt=False).start_in_doubt is False

@@ -88,8 +88,8 @@ def test_a_wrong_matching_gives_way_to_the_start_without_landmarks(figure_pair):
     result = dense_map(shape_1, shape_2, wrong, config)
     assert result.check.start == "spectral" and "rival start" in result.timings
     verdict = result.check.verdict
-    assert verdict.seed == 1 and verdict.signatures[1] < (1 - config.seed_margin) * verdict.signatures[0]
-    assert rate(result) >= DENSE_MIN_RATE and not result.check.trusted
+    assert verdict.seed == verdict.rival == 1 and set(verdict.signatures) == {0, 1}
+    assert rate(result) >= DENSE_MIN_RATE
     alone = dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, start_in_doubt=False))
     assert alone.check.start == "matches" and not alone.check.trusted and rate(alone) < 0.2
 

@@ -269,9 +269,11 @@ def _seed_verdict(about: dict) -> str:
     """What the seed check (a :class:`~darcyan.dense.seeds.SeedVerdict` as a dict:
     ``DenseMap.check.verdict`` or ``verified_matches``' second result) decided."""
     start_from = about.get("start_from", "the spectra")
+    close = "" if about["clear"] else "; another candidate scores close: look at the matches (--plot)"
     if about.get("start") == "spectral" and about.get("rival") is not None:
         return (f"started without the feature matches: the map from them was not trusted, and landmarks from a "
-                f"short map started from {start_from} keep the shapes' curvature clearly better")
+                f"short map started from {start_from} keep the shapes' curvature clearly better than theirs"
+                + close)
     if about.get("start") == "spectral":
         return (f"started without the feature matches (fewer than 3 consistent ones): landmarks from a short map "
                 f"started from {start_from}")
@@ -288,7 +290,7 @@ def _seed_verdict(about: dict) -> str:
     else:
         verdict = (f"alternative matching {about['seed']} replaces the feature matches (its short dense map keeps "
                    f"the shapes' curvature clearly better)")
-    return verdict + lost + ("" if about["clear"] else "; another candidate scores close: look at the matches (--plot)")
+    return verdict + lost + close
 
 
 def _progress(args: argparse.Namespace):

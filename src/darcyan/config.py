@@ -518,6 +518,8 @@ class DenseConfig:
                 raise ConfigError(f"dense: {name} must be a positive integer, got {value!r}")
         if self.basis_start > self.basis_size:
             raise ConfigError(f"dense: basis_start ({self.basis_start}) exceeds basis_size ({self.basis_size})")
+        if not isinstance(self.start_in_doubt, bool):
+            raise ConfigError(f"dense: start_in_doubt must be true or false, got {self.start_in_doubt!r}")
         for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "signature_until",
                      "basis_margin", "margin_from", "alignment_rounds"):
             value = getattr(self, name)

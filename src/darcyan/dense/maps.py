@@ -5,7 +5,9 @@
 1. the seed (:mod:`darcyan.dense.seeds`): the sparse matching or one of its alternatives, the
    one whose short ZoomOut best keeps the curvature signature (:mod:`darcyan.dense.signatures`),
    or, when none gives three consistent landmarks, the landmarks of a short map started from
-   the spectra or the axes of inertia (:mod:`darcyan.dense.start`);
+   the spectra or the axes of inertia (:mod:`darcyan.dense.start`); when the map from the
+   matches is not trusted, that start competes with its seed, scored alike, and the map is made
+   again from it when it scores clearly better (``DenseConfig.start_in_doubt``);
 2. its landmarks (:mod:`darcyan.dense.landmarks`): the consistent matches, and each vertex's
    distances to them and their turns, whose nearest neighbours on the other shape give the
    first maps in both directions;
@@ -133,7 +135,8 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             correspondence with fewer than :data:`~darcyan.dense.landmarks.MIN_LANDMARKS`
             consistent landmark pairs leaves the map to the best usable alternative, and when
             none has them, to landmarks found by a short map started without them
-            (:func:`~darcyan.dense.start.spectral_matching`).
+            (:func:`~darcyan.dense.start.spectral_matching`); a map from the matches that is not
+            trusted meets that start too (:func:`~darcyan.dense.seeds.rival_start`).
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
     say = progress or (lambda stage: None)
@@ -146,18 +149,24 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     if not check.trusted and check.start == "matches" and config.start_in_doubt and config.method == "zoomout":
         # The map from the matches is in doubt: the start without landmarks competes with its seed.
         say("spectral start (the map from the matches is not trusted)")
+        scores = {s.rank: s.signature for s in choice.seeds}
+        scored = len(choice.seeds) > 1 or seed.signature > 0  # a lone seed is not scored (0)
+        choice = dataclasses.replace(choice, seeds=[seed])  # the losers' per-vertex arrays let go
         t = time.perf_counter()
-        rival = rival_start(shape_1, shape_2, correspondence, config, choice)
+        rival = rival_start(shape_1, shape_2, correspondence, config, choice, scored)
         timings["rival start"] = time.perf_counter() - t
         if rival is not None:
             rival_seed, rival_score, chosen_score = rival
-            scores = {**{s.rank: s.signature for s in choice.seeds}, seed.rank: chosen_score,
-                      rival_seed.rank: rival_score}
+            scores.update({seed.rank: chosen_score, rival_seed.rank: rival_score})
             if rival_score < (1.0 - config.seed_margin) * chosen_score:
-                seed = rival_seed
+                seed, local = rival_seed, None  # the first map and its seed let go before the second
+                choice = dataclasses.replace(choice, seed=seed, seeds=[seed])
                 local, residual = _map_of_seed(shape_1, shape_2, seed, config, choice, say, timings, "rival ")
-            verdict = seed_check(seed.rank, scores, config.seed_margin, seed.start, seed.start_from, rival_seed.rank)
-            check = _checked(shape_1, local, seed, verdict, residual, correspondence, config)
+                verdict = seed_check(seed.rank, scores, config.seed_margin, seed.start, seed.start_from, seed.rank)
+                check = _checked(shape_1, local, seed, verdict, residual, correspondence, config)
+            else:  # the same map: only the verdict gains the rival (a map not trusted stays so)
+                verdict = seed_check(seed.rank, scores, config.seed_margin, seed.start, seed.start_from, rival_seed.rank)
+                check = dataclasses.replace(check, verdict=verdict)
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([shape_1.mesh.input_index[seed.source], shape_2.mesh.input_index[seed.target]], axis=1)
     return DenseMap(target, landmarks, timings, check)

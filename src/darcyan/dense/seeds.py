@@ -84,7 +84,8 @@ def matching_of_seed(correspondence, rank: int):
 def seed_scores(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfig()) -> dict:
     """``{rank: score}``: the signature score of each usable seed (0: ``correspondence`` itself,
     1, 2, ...: its alternatives), lower is better; the scores :func:`~darcyan.dense.maps.dense_map` chooses its seed
-    by (see :func:`chosen_seed`), without making the map. Raises DarcyanError like it."""
+    by (see :func:`chosen_seed`), without making the map (a map from them that is not trusted then
+    meets the start without landmarks, :func:`rival_start`, not scored here). Raises DarcyanError like it."""
     return verified_matches(shape_1, shape_2, correspondence, config, full_basis=True)[1]["signatures"]
 
 
@@ -96,12 +97,15 @@ class SeedVerdict:
         seed: the chosen seed's rank (0: the sparse matching; 1, 2, ...: its alternatives; one
             past them: the landmark-free start).
         seeds: how many usable, distinct seeds were weighed.
-        signature: the chosen seed's signature score (lower is better; 0 when it had no rival).
+        signature: the chosen seed's signature score (lower is better; 0 when it had no rival
+            and was not scored).
         runner_up: the best score of the others (``None`` without others).
         signatures: every usable seed's score (rank -> score).
         clear: whether no other seed scored within the margin (relative) of it.
-        start: how the map was started: ``"matches"``, or ``"spectral"`` when no matching had
-            three consistent landmarks (:mod:`darcyan.dense.start`).
+        start: how the map was started: ``"matches"``, or ``"spectral"``: from the landmarks of
+            the start without them (:mod:`darcyan.dense.start`), when no matching had three
+            consistent landmarks, or when it won over a map from the matches that was not
+            trusted (then ``rival`` is its rank).
         start_from: with a spectral start, the short map whose landmarks it used.
         rival: the rank of the start without landmarks when it competed with a map from the
             matches that was not trusted (``DenseConfig.start_in_doubt``; its score in
@@ -248,18 +252,20 @@ def _spectral_seeds(shape_1, shape_2, correspondence, config: DenseConfig, sampl
     return [Seed(rank, *landmarks, matching.signature, start="spectral", start_from=matching.start)]
 
 
-def rival_start(shape_1, shape_2, correspondence, config: DenseConfig, choice: SeedChoice) -> tuple | None:
-    """The start without landmarks as a rival of ``choice.seed`` (a map from the matches in doubt):
-    ``(rival, rival_score, chosen_score)``, the :func:`_spectral_seeds` seed and both seeds'
-    signature scores by one short ZoomOut each from their landmark coordinates (the scoring of
-    the matchings' seeds; a single matching's seed was not scored), or ``None`` when the bases
-    are too small for the start."""
+def rival_start(shape_1, shape_2, correspondence, config: DenseConfig, choice: SeedChoice,
+                scored: bool = True) -> tuple | None:
+    """The start without landmarks as a rival of ``choice.seed`` (a map from the matches in doubt,
+    ``DenseConfig.start_in_doubt``): ``(rival, rival_score, chosen_score)``, the
+    :func:`_spectral_seeds` seed and both seeds' signature scores by one short ZoomOut each from
+    their landmark coordinates, as :func:`_seeds` scores the matchings (``scored``: whether the
+    chosen seed's ``signature`` is such a score already; a lone matching's seed is not scored),
+    or ``None`` when the bases are too small for the start."""
     rivals = _spectral_seeds(shape_1, shape_2, correspondence, config, choice.samples, choice.bases, ({}, {}))
     if not rivals:
         return None
     scoring = _SeedScoring(shape_1, shape_2, config, choice.samples, choice.bases)
     rival, seed = rivals[0], choice.seed
-    chosen_score = seed.signature if len(choice.seeds) > 1 else scoring.score(seed.coords_1, seed.coords_2)
+    chosen_score = seed.signature if scored else scoring.score(seed.coords_1, seed.coords_2)
     return rival, scoring.score(rival.coords_1, rival.coords_2), chosen_score
 
 
