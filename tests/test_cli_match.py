@@ -101,7 +101,7 @@ def test_the_seed_verdict_says_how_the_map_was_started():
 
     kept = seed_check(0, {0: 0.10, 1: 0.20, 4: 0.099}, 0.04, rival=4).as_dict()
     assert "hold against their alternatives" in _seed_verdict(kept)
-    assert "weighed against it and did not do clearly better" in _seed_verdict(kept)
+    assert "weighed against it and not taken" in _seed_verdict(kept)
     alone = seed_check(0, {0: 0.10, 1: 0.099}, 0.04, rival=1).as_dict()  # one matching and the rival
     assert _seed_verdict(alone).startswith("the feature matches, nothing to weigh them against; a start without")
     taken = seed_check(4, {0: 0.10, 1: 0.20, 4: 0.05}, 0.04, "spectral", "axes ++", rival=4).as_dict()

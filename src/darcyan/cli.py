@@ -277,8 +277,8 @@ def _seed_verdict(about: dict) -> str:
     if about.get("start") == "spectral":
         return (f"started without the feature matches (fewer than 3 consistent ones): landmarks from a short map "
                 f"started from {start_from}")
-    lost = ("; a start without the feature matches was weighed against it and did not do clearly better"
-            if about.get("rival") is not None else "")
+    lost = ("; a start without the feature matches was weighed against it and not taken (its curvature score or its "
+            "alignment no better)" if about.get("rival") is not None else "")
     if about["seeds"] - (about.get("rival") is not None) == 1:  # the matchings' seeds, the rival aside
         return ("the feature matches, nothing to weigh them against" if about["seed"] == 0 else
                 f"alternative matching {about['seed']}: the feature matches have too few consistent matches") + lost

@@ -441,11 +441,12 @@ class DenseConfig:
             costs ``start_landmarks`` fast-marching solves on the target).
         start_in_doubt: when the map started from the matches is not trusted, the start
             without landmarks competes with its seed: its landmarks seed a short ZoomOut scored
-            like the matchings' (the curvature signature), and when it scores lower by
-            ``seed_margin``, the map is made again from it (``MapCheck.start`` ``"spectral"``).
-            A wrong sparse matching (or an alternative that beat a right one by a hair) ruins a
-            whole map, and the start without landmarks does not depend on it. Costs a clear pair
-            nothing (``docs/decisions/every-pair.md``).
+            like the matchings' (the curvature signature); when it scores lower by
+            ``seed_margin``, a map is made from it, and taken (``MapCheck.start``
+            ``"spectral"``) when the alignment also follows it more closely (a lower
+            ``MapCheck.residual``). A wrong sparse matching (or an alternative that beat a right
+            one by a hair) ruins a whole map, and the start without landmarks does not depend on
+            it. Costs a clear pair nothing (``docs/decisions/every-pair.md``).
         alignment_slack: a vertex keeps ZoomOut's image where the aligned image's geodesic
             distances to the landmarks differ from the vertex's own by more than this (sqrt(area)
             units) beyond those of ZoomOut's image: two fingers side by side are near in space,

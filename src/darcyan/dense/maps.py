@@ -6,8 +6,9 @@
    one whose short ZoomOut best keeps the curvature signature (:mod:`darcyan.dense.signatures`),
    or, when none gives three consistent landmarks, the landmarks of a short map started from
    the spectra or the axes of inertia (:mod:`darcyan.dense.start`); when the map from the
-   matches is not trusted, that start competes with its seed, scored alike, and the map is made
-   again from it when it scores clearly better (``DenseConfig.start_in_doubt``);
+   matches is not trusted, that start competes with its seed, scored alike, and its map is taken
+   when it scores clearly better and the alignment follows it more closely
+   (``DenseConfig.start_in_doubt``);
 2. its landmarks (:mod:`darcyan.dense.landmarks`): the consistent matches, and each vertex's
    distances to them and their turns, whose nearest neighbours on the other shape give the
    first maps in both directions;
@@ -146,6 +147,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     local, residual = _map_of_seed(shape_1, shape_2, seed, config, choice, say, timings)
     check = _checked(shape_1, local, seed, check_of_seeds(seed, choice.seeds, config.seed_margin), residual,
                      correspondence, config)
+    pairs = (seed.source, seed.target)
     if not check.trusted and check.start == "matches" and config.start_in_doubt and config.method == "zoomout":
         # The map from the matches is in doubt: the start without landmarks competes with its seed.
         say("spectral start (the map from the matches is not trusted)")
@@ -155,20 +157,27 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         t = time.perf_counter()
         rival = rival_start(shape_1, shape_2, correspondence, config, choice, scored)
         timings["rival start"] = time.perf_counter() - t
+        del seed  # its landmark pairs are kept (pairs); its per-vertex arrays go with the choice below
         if rival is not None:
             rival_seed, rival_score, chosen_score = rival
-            scores.update({seed.rank: chosen_score, rival_seed.rank: rival_score})
+            scores.update({check.seed: chosen_score, rival_seed.rank: rival_score})
+            kept = seed_check(check.seed, scores, config.seed_margin, check.start, check.verdict.start_from,
+                              rival_seed.rank)
             if rival_score < (1.0 - config.seed_margin) * chosen_score:
-                seed, local = rival_seed, None  # the first map and its seed let go before the second
-                choice = dataclasses.replace(choice, seed=seed, seeds=[seed])
-                local, residual = _map_of_seed(shape_1, shape_2, seed, config, choice, say, timings, "rival ")
-                verdict = seed_check(seed.rank, scores, config.seed_margin, seed.start, seed.start_from, seed.rank)
-                check = _checked(shape_1, local, seed, verdict, residual, correspondence, config)
-            else:  # the same map: only the verdict gains the rival (a map not trusted stays so)
-                verdict = seed_check(seed.rank, scores, config.seed_margin, seed.start, seed.start_from, rival_seed.rank)
-                check = dataclasses.replace(check, verdict=verdict)
+                choice = dataclasses.replace(choice, seed=rival_seed, seeds=[rival_seed])
+                rival_local, rival_residual = _map_of_seed(shape_1, shape_2, rival_seed, config, choice, say, timings,
+                                                           "rival ")
+                # Two judges: the signature chose the rival; its map is taken only when the
+                # alignment also follows it more closely (NaN without alignment: the signature alone).
+                if not rival_residual >= residual:
+                    local, residual, pairs = rival_local, rival_residual, (rival_seed.source, rival_seed.target)
+                    verdict = seed_check(rival_seed.rank, scores, config.seed_margin, rival_seed.start,
+                                         rival_seed.start_from, rival_seed.rank)
+                    check, kept = _checked(shape_1, local, rival_seed, verdict, residual, correspondence, config), None
+            if kept is not None:  # the same map: only the verdict gains the rival (a map not trusted stays so)
+                check = dataclasses.replace(check, verdict=kept)
     target = input_map(shape_1, shape_2, local)
-    landmarks = np.stack([shape_1.mesh.input_index[seed.source], shape_2.mesh.input_index[seed.target]], axis=1)
+    landmarks = np.stack([shape_1.mesh.input_index[pairs[0]], shape_2.mesh.input_index[pairs[1]]], axis=1)
     return DenseMap(target, landmarks, timings, check)
 
 
