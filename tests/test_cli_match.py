@@ -99,12 +99,16 @@ def test_the_seed_verdict_says_how_the_map_was_started():
     from darcyan.cli import _seed_verdict
     from darcyan.dense.seeds import seed_check
 
-    kept = seed_check(0, {0: 0.10, 1: 0.20, 4: 0.099}, 0.04, rival=4).as_dict()
+    kept = seed_check(0, {0: 0.10, 1: 0.20, 4: 0.101}, 0.04, rival=4).as_dict()
     assert "hold against their alternatives" in _seed_verdict(kept)
-    assert "weighed against it and not taken" in _seed_verdict(kept)
-    alone = seed_check(0, {0: 0.10, 1: 0.099}, 0.04, rival=1).as_dict()  # one matching and the rival
-    assert _seed_verdict(alone).startswith("the feature matches, nothing to weigh them against; a start without")
+    assert "weighed against it and did not score better" in _seed_verdict(kept)
+    refused = seed_check(0, {0: 0.10, 1: 0.20, 4: 0.05}, 0.04, rival=4).as_dict()  # scored better, alignment said no
+    assert "the alignment followed its map less closely: not taken" in _seed_verdict(refused)
+    assert "scores close" not in _seed_verdict(refused)
+    alone = seed_check(0, {0: 0.10, 1: 0.101}, 0.04, rival=1).as_dict()  # one matching and the rival
+    assert _seed_verdict(alone).startswith("the feature matches, no alternative matching to weigh them against; "
+                                           "a start without")
     taken = seed_check(4, {0: 0.10, 1: 0.20, 4: 0.05}, 0.04, "spectral", "axes ++", rival=4).as_dict()
-    assert "the map from them was not trusted" in _seed_verdict(taken) and "axes ++" in _seed_verdict(taken)
+    assert "the map from the matchings was not trusted" in _seed_verdict(taken) and "axes ++" in _seed_verdict(taken)
     fallback = seed_check(2, {2: 0.05}, 0.04, "spectral", "spectral +-+-").as_dict()
     assert "fewer than 3 consistent ones" in _seed_verdict(fallback) and "rival" not in fallback

@@ -270,18 +270,25 @@ def _seed_verdict(about: dict) -> str:
     ``DenseMap.check.verdict`` or ``verified_matches``' second result) decided."""
     start_from = about.get("start_from", "the spectra")
     close = "" if about["clear"] else "; another candidate scores close: look at the matches (--plot)"
-    if about.get("start") == "spectral" and about.get("rival") is not None:
-        return (f"started without the feature matches: the map from them was not trusted, and landmarks from a "
-                f"short map started from {start_from} keep the shapes' curvature clearly better than theirs"
-                + close)
+    rival = about.get("rival")
+    if about.get("start") == "spectral" and rival is not None:
+        return (f"started without the feature matches: the map from the matchings was not trusted, and landmarks "
+                f"from a short map started from {start_from} keep the shapes' curvature clearly better" + close)
     if about.get("start") == "spectral":
         return (f"started without the feature matches (fewer than 3 consistent ones): landmarks from a short map "
                 f"started from {start_from}")
-    lost = ("; a start without the feature matches was weighed against it and not taken (its curvature score or its "
-            "alignment no better)" if about.get("rival") is not None else "")
+    lost = ""
+    if rival is not None:
+        signatures = about["signatures"]
+        rival_score = signatures.get(rival, signatures.get(str(rival)))  # JSON records key ranks by strings
+        if rival_score is not None and rival_score < about["signature"]:  # it scored better: refused by the alignment
+            lost, close = ("; a start without the feature matches scored better, but the alignment followed its map "
+                           "less closely: not taken"), ""
+        else:
+            lost = "; a start without the feature matches was weighed against it and did not score better"
     if about["seeds"] - (about.get("rival") is not None) == 1:  # the matchings' seeds, the rival aside
-        return ("the feature matches, nothing to weigh them against" if about["seed"] == 0 else
-                f"alternative matching {about['seed']}: the feature matches have too few consistent matches") + lost
+        return ("the feature matches, no alternative matching to weigh them against" if about["seed"] == 0 else
+                f"alternative matching {about['seed']}: the feature matches have too few consistent matches") + lost + close
     if about["seed"] == 0:
         verdict = "the feature matches hold against their alternatives"
     elif 0 not in about["signatures"]:
