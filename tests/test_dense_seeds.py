@@ -7,7 +7,7 @@ import io
 
 import numpy as np
 import pytest
-from conftest import DENSE_SCORED, FAST_DENSE, faust_pair, tip_correspondence
+from conftest import FAST_DENSE, faust_pair, tip_correspondence
 
 from darcyan import DarcyanConfig
 from darcyan.cli import main
@@ -193,29 +193,3 @@ def test_a_map_that_sets_aside_a_sure_matching_is_not_trusted(figure_pair):
         assert result.check.seed == 1 and result.check.orientation > 0.5
         assert result.check.trusted is in_doubt
 
-
-
-@pytest.mark.slow
-def test_the_alignment_restores_a_sure_matching_that_the_signature_set_aside(figure_pair, monkeypatch):
-    """The sparse matching (right, sure) loses to a wrong alternative (tips rolled by one) by the
-    signature (forced here): the alternative's map is not trusted, the sparse matching's own map
-    is made too, the alignment follows it more closely, and it is the map (seed 0), right but not
-    trusted: two judges disagreed. Without the second judge the map is wrong, so the test can fail."""
-    from darcyan.dense import seeds
-
-    shape_1, shape_2, _ = figure_pair
-    tips = synthetic.figure_tips()
-    right = dataclasses.replace(tip_correspondence(tips, tips), in_doubt=False,
-                                alternatives=(tip_correspondence(tips, np.roll(tips, 1)),))
-    monkeypatch.setattr(seeds, "chosen_seed", lambda scores, margin: 1)  # the signature prefers the wrong one
-    config = dataclasses.replace(FAST_DENSE, landmarks="all")
-
-    def rate(result):
-        return evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED,
-                              target_solver=shape_2.solver).rate
-
-    result = dense_map(shape_1, shape_2, right, config)
-    assert result.check.seed == 0 and result.check.start == "matches" and not result.check.trusted
-    assert "matches zoomout" in result.timings and rate(result) >= 0.9
-    alone = dense_map(shape_1, shape_2, right, dataclasses.replace(config, start_in_doubt=False))
-    assert alone.check.seed == 1 and rate(alone) < 0.2

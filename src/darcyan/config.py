@@ -446,9 +446,7 @@ class DenseConfig:
             ``"spectral"``) when the alignment also follows it more closely (a lower
             ``MapCheck.residual``). A wrong sparse matching (or an alternative that beat a right
             one by a hair) ruins a whole map, and the start without landmarks does not depend on
-            it. Before it, when an alternative set the sparse matching aside, the sparse
-            matching's own map is made too and kept instead when its residual is lower (the
-            map stays not trusted). Costs a clear pair nothing (``docs/decisions/every-pair.md``).
+            it. Costs a clear pair nothing (``docs/decisions/every-pair.md``).
         alignment_slack: a vertex keeps ZoomOut's image where the aligned image's geodesic
             distances to the landmarks differ from the vertex's own by more than this (sqrt(area)
             units) beyond those of ZoomOut's image: two fingers side by side are near in space,

@@ -149,26 +149,11 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
                      correspondence, config)
     pairs = (seed.source, seed.target)
     if not check.trusted and check.start == "matches" and config.start_in_doubt and config.method == "zoomout":
-        scores = {s.rank: s.signature for s in choice.seeds}
-        scored = len(choice.seeds) > 1 or seed.signature > 0  # a lone seed is not scored (0)
-        sparse = next((s for s in choice.seeds if s.rank == 0 and s.fields_1 is not None), None)
-        if sparse is not None and seed is not sparse and config.alignment_rounds > 0:
-            # An alternative set the sparse matching aside and its map is in doubt: the sparse
-            # matching's own map too, and the alignment (a judge beside the signature) takes the
-            # one it follows more closely. Two judges disagreed: not trusted either way.
-            say("zoomout from the feature matches (the alternative's map is not trusted)")
-            sparse_local, sparse_residual = _map_of_seed(shape_1, shape_2, sparse, config, choice, say, timings,
-                                                         "matches ")
-            if sparse_residual < residual:
-                seed, local, residual, pairs = sparse, sparse_local, sparse_residual, (sparse.source, sparse.target)
-                verdict = seed_check(sparse.rank, scores, config.seed_margin, sparse.start, sparse.start_from)
-                check = dataclasses.replace(_checked(shape_1, local, seed, verdict, residual, correspondence, config),
-                                            trusted=False)
-            del sparse_local
-        del sparse
         # The map from the matches is in doubt: the start without landmarks competes with its seed.
         say("spectral start (the map from the matches is not trusted)")
-        choice = dataclasses.replace(choice, seed=seed, seeds=[seed])  # the others' per-vertex arrays let go
+        scores = {s.rank: s.signature for s in choice.seeds}
+        scored = len(choice.seeds) > 1 or seed.signature > 0  # a lone seed is not scored (0)
+        choice = dataclasses.replace(choice, seeds=[seed])  # the losers' per-vertex arrays let go
         t = time.perf_counter()
         rival = rival_start(shape_1, shape_2, correspondence, config, choice, scored)
         timings["rival start"] = time.perf_counter() - t
