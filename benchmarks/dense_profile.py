@@ -41,10 +41,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from speed import _peak_mb, _reset_peak  # benchmarks/speed.py: the same high-water mark, reset alike
-
-REPO = Path(__file__).resolve().parents[1]
-DATA = Path(os.environ.get("DARCYAN_DATA", REPO.parent / "shared" / "data"))
+from speed import DATA, _peak_mb, _reset_peak  # benchmarks/speed.py: the data folder, the high-water mark
 
 # label -> (source, target): relative to DATA, or a subdivided copy (see subdivided_pair)
 PAIRS = {

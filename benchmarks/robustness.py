@@ -156,10 +156,7 @@ def level_set_copy(mesh: Mesh, step: float, offset: float) -> Mesh:
                            np.asfortranarray(manifold, dtype=np.int32), count)
     if len(f) > count:
         raise ValueError(f"{mesh.name}: QSlim stopped at {len(f)} faces, above {count}")
-    used = np.unique(f)  # QSlim returns only the vertices it kept; renumbered all the same, should it not
-    renumber = np.full(len(v), -1, dtype=np.int64)
-    renumber[used] = np.arange(len(used))
-    return Mesh(v[used], renumber[f])
+    return Mesh(v, f)  # QSlim returns only the vertices its faces use
 
 
 def spread_faces(mesh: Mesh, count: int, rng) -> np.ndarray:

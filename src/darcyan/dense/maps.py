@@ -161,21 +161,23 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
         if rival is not None:
             rival_seed, rival_score, chosen_score = rival
             scores.update({check.seed: chosen_score, rival_seed.rank: rival_score})
-            kept = seed_check(check.seed, scores, config.seed_margin, check.start, check.verdict.start_from,
-                              rival_seed.rank)
+            taken = False
             if rival_score < (1.0 - config.seed_margin) * chosen_score:
                 choice = dataclasses.replace(choice, seed=rival_seed, seeds=[rival_seed])
                 rival_local, rival_residual = _map_of_seed(shape_1, shape_2, rival_seed, config, choice, say, timings,
                                                            "rival ")
                 # Two judges: the signature chose the rival; its map is taken only when the
                 # alignment also follows it more closely (NaN without alignment: the signature alone).
-                if not rival_residual >= residual:
-                    local, residual, pairs = rival_local, rival_residual, (rival_seed.source, rival_seed.target)
-                    verdict = seed_check(rival_seed.rank, scores, config.seed_margin, rival_seed.start,
-                                         rival_seed.start_from, rival_seed.rank)
-                    check, kept = _checked(shape_1, local, rival_seed, verdict, residual, correspondence, config), None
-            if kept is not None:  # the same map: only the verdict gains the rival (a map not trusted stays so)
-                check = dataclasses.replace(check, verdict=kept)
+                taken = not rival_residual >= residual
+            if taken:
+                local, residual, pairs = rival_local, rival_residual, (rival_seed.source, rival_seed.target)
+                verdict = seed_check(rival_seed.rank, scores, config.seed_margin, rival_seed.start,
+                                     rival_seed.start_from, rival_seed.rank)
+                check = _checked(shape_1, local, rival_seed, verdict, residual, correspondence, config)
+            else:  # the same map: only the verdict gains the rival (a map not trusted stays so)
+                verdict = seed_check(check.seed, scores, config.seed_margin, check.start, check.verdict.start_from,
+                                     rival_seed.rank)
+                check = dataclasses.replace(check, verdict=verdict)
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([shape_1.mesh.input_index[pairs[0]], shape_2.mesh.input_index[pairs[1]]], axis=1)
     return DenseMap(target, landmarks, timings, check)
