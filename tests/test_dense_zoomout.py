@@ -12,28 +12,57 @@ from darcyan.errors import ConfigError
 from darcyan.geometry.mesh import Mesh
 
 
-def test_merged_zoomout_terms_measure_the_same_distances():
-    # The bijectivity and orthogonality terms share one block of columns and one extra column:
-    # squared distances between the embeddings must equal the sum of the four terms.
+def _term(x, y):
+    return ((x[:, None] - y[None]) ** 2).sum(-1)
+
+
+def _scores(search):
+    """``(n_a, n_b)`` what a MapSearch minimizes over its reference rows."""
+    return search.offsets[None, :] - 2.0 * search.queries @ search.references.T
+
+
+def _same_up_to_each_query(scores, distances):
+    # Scores in inner-product form leave out each query's own length: the same for every
+    # reference row, so they must differ from the squared distances by one number per row.
+    gap = distances - scores
+    return np.allclose(gap, gap[:, :1], rtol=1e-10, atol=1e-9 * np.abs(distances).max())
+
+
+def test_zoomout_search_measures_the_sum_of_its_terms():
+    # The search's scores are the sum of the four terms (coupling, bijectivity, orthogonality,
+    # landmarks), each query's own part aside, whatever the weights; and its nearest rows are
+    # the rows of least summed terms.
     from darcyan.dense.zoomout import map_embeddings
 
     rng = np.random.default_rng(0)
     b_a, b_b = rng.normal(size=(40, 12)), rng.normal(size=(50, 12))
     c_ab, c_ba = rng.normal(size=(12, 12)), rng.normal(size=(12, 12))
     f_a, f_b = rng.normal(size=(40, 4)), rng.normal(size=(50, 4))
-    for config in (DenseConfig(), DenseConfig(bijectivity=0.5, orthogonality=2.0), DenseConfig(bijectivity=0.0)):
-        q, r = map_embeddings(b_a, b_b, c_ab, c_ba, config, f_a, f_b)
-        got = ((q[:, None] - r[None]) ** 2).sum(-1)
-
-        def term(x, y):
-            return ((x[:, None] - y[None]) ** 2).sum(-1)
-
-        want = (term(b_a @ c_ab, b_b) + config.bijectivity**2 * term(b_a, b_b @ c_ba)
-                + config.orthogonality**2 * term(b_a, b_b @ c_ab.T) + config.landmark_weight**2 * term(f_a, f_b))
-        assert np.allclose(got, want, rtol=1e-10, atol=1e-9)
+    for config in (DenseConfig(), DenseConfig(bijectivity=0.5, orthogonality=2.0), DenseConfig(bijectivity=0.0),
+                   DenseConfig(bijectivity=0.0, orthogonality=0.0)):
+        search = map_embeddings(b_a, b_b, c_ab, c_ba, config, f_a, f_b)
+        want = (_term(b_a @ c_ab, b_b) + config.bijectivity**2 * _term(b_a, b_b @ c_ba)
+                + config.orthogonality**2 * _term(b_a, b_b @ c_ab.T) + config.landmark_weight**2 * _term(f_a, f_b))
+        assert _same_up_to_each_query(_scores(search), want)
+        assert np.array_equal(search.nearest(), np.argmin(want, axis=1))
+    assert not _same_up_to_each_query(_scores(search), want + _term(f_a, f_b))  # the check can fail
 
 
-def test_rectangular_zoomout_terms_measure_the_same_distances():
+def test_zoomout_search_is_narrower_than_its_terms():
+    # The search reads p + c + d columns (basis, landmark and other coordinates), not the 2k + 1
+    # + c + d of the stacked terms.
+    from darcyan.dense.zoomout import map_embeddings
+
+    rng = np.random.default_rng(2)
+    b_a, b_b = rng.normal(size=(30, 18)), rng.normal(size=(35, 18))
+    c_ab, c_ba = rng.normal(size=(15, 12)), rng.normal(size=(15, 12))
+    f_a, f_b, g_a, g_b = rng.normal(size=(30, 4)), rng.normal(size=(35, 4)), rng.normal(size=(30, 2)), rng.normal(size=(35, 2))
+    search = map_embeddings(b_a, b_b, c_ab, c_ba, DenseConfig(), f_a, f_b, g_a, g_b, dtype=np.float32)
+    assert search.queries.shape == (30, 15 + 4 + 2) and search.references.shape == (35, 15 + 4 + 2)
+    assert search.queries.dtype == np.float32 and search.offsets.shape == (35,)
+
+
+def test_rectangular_zoomout_search_measures_the_sum_of_its_terms():
     # With a margin the maps are (p, k): each term compares the columns the docstring names.
     from darcyan.dense.zoomout import map_embeddings
 
@@ -43,14 +72,13 @@ def test_rectangular_zoomout_terms_measure_the_same_distances():
     c_ab, c_ba = rng.normal(size=(p, k)), rng.normal(size=(p, k))
     f_a, f_b = rng.normal(size=(40, 4)), rng.normal(size=(50, 4))
     config = DenseConfig(bijectivity=0.5, orthogonality=2.0)
-    q, r = map_embeddings(b_a, b_b, c_ab, c_ba, config, f_a, f_b)
-
-    def term(x, y):
-        return ((x[:, None] - y[None]) ** 2).sum(-1)
-
-    want = (term(b_a[:, :p] @ c_ab, b_b[:, :k]) + 0.25 * term(b_a[:, :k], b_b[:, :p] @ c_ba)
-            + 4.0 * term(b_a[:, :k], b_b[:, :k] @ c_ab[:k].T) + config.landmark_weight**2 * term(f_a, f_b))
-    assert np.allclose(((q[:, None] - r[None]) ** 2).sum(-1), want, rtol=1e-10, atol=1e-9)
+    g_a, g_b = rng.normal(size=(40, 3)), rng.normal(size=(50, 3))
+    search = map_embeddings(b_a, b_b, c_ab, c_ba, config, f_a, f_b, g_a, g_b)
+    want = (_term(b_a[:, :p] @ c_ab, b_b[:, :k]) + 0.25 * _term(b_a[:, :k], b_b[:, :p] @ c_ba)
+            + 4.0 * _term(b_a[:, :k], b_b[:, :k] @ c_ab[:k].T) + config.landmark_weight**2 * _term(f_a, f_b)
+            + _term(g_a, g_b))
+    assert _same_up_to_each_query(_scores(search), want)
+    assert np.array_equal(search.nearest(), np.argmin(want, axis=1))
 
 
 @pytest.mark.slow
@@ -172,7 +200,6 @@ def test_coarse_coordinates_steer_only_the_zoomout_steps_up_to_signature_until(f
     # with 20 eigenfunctions alone; coordinates that correspond (here the positions), in the
     # coarse steps, lead it there; and steps above signature_until ignore them exactly.
     from darcyan.dense.zoomout import map_embeddings, zoomout
-    from darcyan.geometry.knn import nearest_rows
     from darcyan.geometry.shape import prepare_shape
 
     mesh = figure_poses[0]
@@ -186,8 +213,7 @@ def test_coarse_coordinates_steer_only_the_zoomout_steps_up_to_signature_until(f
 
     def within(config, coarse):  # coarse: (coarse_1, coarse_2[, steady_1, steady_2])
         c_12, c_21 = zoomout(basis_1, basis_2, first_12, first_21, config, None, None, *coarse)
-        q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config)
-        image = nearest_rows(r, q)
+        image = map_embeddings(basis_1, basis_2, c_12, c_21, config).nearest()
         return np.mean(np.linalg.norm(copy.vertices[image] - copy.vertices[truth_12], axis=1) < 0.05 * size)
 
     config = DenseConfig(basis_start=4, basis_size=20, basis_step=4, signature_until=20)

@@ -44,6 +44,21 @@ def test_nearest_rows_agrees_with_brute_force(dim):
     assert np.array_equal(nearest_rows(reference, queries), expected)
 
 
+@pytest.mark.parametrize("dim", [3, 40])
+def test_nearest_rows_with_offsets_minimize_the_offset_less_twice_the_product(dim):
+    # Offsets |r|^2 give the nearest rows (in 3 dimensions: the brute force, not the k-d tree);
+    # other offsets change the rows found to those of least offset - 2 q.r.
+    rng = np.random.default_rng(dim)
+    reference, queries = rng.normal(size=(500, dim)), rng.normal(size=(200, dim))
+    lengths = (reference**2).sum(axis=1)
+    assert np.array_equal(nearest_rows(reference, queries, lengths), nearest_rows(reference, queries))
+    offsets = lengths + rng.uniform(0.0, 4.0 * dim, 500)
+    expected = np.argmin(offsets[None, :] - 2.0 * queries @ reference.T, axis=1)
+    found = nearest_rows(reference, queries, offsets)
+    assert np.array_equal(found, expected)
+    assert not np.array_equal(found, nearest_rows(reference, queries))
+
+
 def test_nearest_rows_near_equals_the_full_search_on_a_smooth_surface_embedding(sphere):
     # Rows: a smooth embedding of the sphere's vertices (position and a few smooth functions of
     # it, like a dense map's coordinates); queries: the embedding at random points of the sphere.
@@ -67,6 +82,16 @@ def test_nearest_rows_near_equals_the_full_search_on_a_smooth_surface_embedding(
     assert np.mean(found == expected) >= 0.995
     # only the nearest sample's own cell: it misses (measured 0.86), the test can fail
     assert np.mean(nearest_rows_near(reference, queries, points, coarse, 1) == expected) < 0.9
+    # In inner-product form (a dense map's read-out): the rows of the full search with the same
+    # offsets, with and without a guess of each query's sample.
+    offsets = (reference**2).sum(axis=1) + 0.05 * points[:, 0]
+    expected = nearest_rows(reference, queries, offsets)
+    assert np.mean(expected == nearest_rows(reference, queries)) < 0.99  # the offsets change the rows
+    found = nearest_rows_near(reference, queries, points, coarse, DenseConfig().local_search_reach, offsets=offsets)
+    assert np.mean(found == expected) >= 0.995
+    guess = nearest_rows(reference[coarse], queries, offsets[coarse])
+    found = nearest_rows_near(reference, queries, points, coarse, DenseConfig().local_search_reach, guess, 64, offsets)
+    assert np.mean(found == expected) >= 0.995
 
 
 def test_nearest_rows_near_by_blocks_of_queries_equals_one_product(sphere, monkeypatch):

@@ -335,5 +335,5 @@ class _SeedScoring:
         (p_1, p_2), (b_1, b_2) = self.points, self.bases
         f_1, f_2 = coords_1[p_1], coords_2[p_2]
         c_12, c_21 = zoomout(b_1, b_2, nearest_rows(f_2, f_1), nearest_rows(f_1, f_2), self.config, f_1, f_2)
-        q, r = map_embeddings(b_1, b_2, c_12, c_21, self.config, f_1, f_2)
-        return signature_score(self.signatures[0], self.signatures[1][nearest_rows(r, q)], self.config)
+        map_12 = map_embeddings(b_1, b_2, c_12, c_21, self.config, f_1, f_2).nearest()
+        return signature_score(self.signatures[0], self.signatures[1][map_12], self.config)

@@ -83,8 +83,7 @@ def spectral_matching(shape_1, shape_2, config: DenseConfig, samples: tuple, bas
     tried = []
     for name, first_12, first_21 in _first_maps(shape_1, shape_2, p_1, p_2, b_1, b_2, f_1, f_2, config):
         c_12, c_21 = zoomout(b_1, b_2, first_12, first_21, short, f_1, f_2, coarse_1, coarse_2)
-        q, r = map_embeddings(b_1, b_2, c_12, c_21, short, f_1, f_2)
-        map_12 = nearest_rows(r, q)
+        map_12 = map_embeddings(b_1, b_2, c_12, c_21, short, f_1, f_2).nearest()
         score = signature_score(signature_1, signature_2[map_12], config)
         tried.append((score, name, map_12))
     tried.sort(key=lambda entry: entry[0])

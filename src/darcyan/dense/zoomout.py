@@ -19,10 +19,11 @@ large target near each image's nearest ZoomOut sample
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry.knn import KDTREE_MAX_DIM, nearest_rows, nearest_rows_near
+from ..geometry.knn import nearest_rows, nearest_rows_near
 from ..geometry.sampling import farthest_point_vertices, sample_vertices
 from ..parallel import own_threads
 from .config import DenseConfig
@@ -152,16 +153,36 @@ class _Fitter:
         return self.r_inverse[:p, :p] @ (self.q[:, :p].T @ mapped)
 
 
+@dataclass(frozen=True)
+class MapSearch:
+    """A vertex map a -> b as a nearest-row search in inner-product form: query ``i``'s image is
+    the reference row ``j`` minimizing ``offsets[j] - 2 queries[i] . references[j]``
+    (:func:`~darcyan.geometry.knn.nearest_rows` with offsets; :meth:`nearest`).
+
+    Attributes:
+        queries: ``(n_a, d)`` a row per point of shape a.
+        references: ``(n_b, d)`` a row per point of shape b.
+        offsets: ``(n_b,)`` what each reference row adds to every score.
+    """
+
+    queries: np.ndarray
+    references: np.ndarray
+    offsets: np.ndarray
+
+    def nearest(self) -> np.ndarray:
+        """``(n_a,) int64`` the vertex map: each query's reference row."""
+        return nearest_rows(self.references, self.queries, self.offsets)
+
+
 def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.ndarray,
                    config: "DenseConfig", f_a: np.ndarray | None = None, f_b: np.ndarray | None = None,
                    g_a: np.ndarray | None = None, g_b: np.ndarray | None = None,
-                   dtype=np.float64) -> tuple[np.ndarray, np.ndarray]:
-    """Query rows on shape a and reference rows on shape b whose nearest neighbours give the map
-    a -> b minimizing coupling, bijectivity and orthogonality residuals (and, with ``f_a (s_a,
-    c)``, ``f_b (s_b, c)`` the landmark coordinates, their difference weighed by
-    ``config.landmark_weight``; with ``g_a (s_a, d)``, ``g_b (s_b, d)``, those coordinates as they
-    are): ``nearest_rows(references, queries)`` is the vertex map. ``dtype``: of the rows
-    returned (each term computed in double precision, then converted).
+                   dtype=np.float64) -> MapSearch:
+    """The :class:`MapSearch` whose nearest rows give the map a -> b minimizing coupling,
+    bijectivity and orthogonality residuals (and, with ``f_a (s_a, c)``, ``f_b (s_b, c)`` the
+    landmark coordinates, their difference weighed by ``config.landmark_weight``; with ``g_a
+    (s_a, d)``, ``g_b (s_b, d)``, those coordinates as they are). ``dtype``: of the rows returned
+    (each term computed in double precision, then converted).
 
     ``c_ab (p, k)`` (p >= k: see ``DenseConfig.basis_margin``) pulls b's first k coefficients
     back to a's first p (``b_a[:, :p] C_ab ~ b_b[map, :k]``), ``c_ba (p, k)`` the reverse; the
@@ -170,39 +191,51 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
     (area preservation, ``C C^T ~ I`` for a square map): ``b_b[j, :k] C_ab[:k]^T ~ b_a[i, :k]``,
     on the square k x k block alone, leaving a's columns beyond k out of this term (a choice that
     holds near isometry, where that block carries the map, not an exact condition).
+
+    The map is the Euclidean nearest row of embeddings that stack these terms: query ``[a C_ab,
+    sqrt(w) a_k, 0, f_a, g_a]`` against reference ``[b_k, m_j, s_j, f_b, g_b]`` (``w`` the two
+    terms' weights summed, ``m_j`` their weighted mean row and ``s_j`` what is left of them, a
+    number). Every term's product with a query is linear in ``a = b_a[i, :p]``, so the search
+    reads queries ``[a, f_a, g_a]`` against references ``[C_ab b_k + sqrt(w) m_j (padded), f_b,
+    g_b]`` with the reference's squared length as its offset (each query's own length is the
+    same for every ``j``): p + c + d columns instead of 2k + 1 + c + d, the same map up to
+    rounding.
     """
     p, k = c_ab.shape
     w1, w2 = config.bijectivity ** 2, config.orthogonality ** 2
     total = w1 + w2
     landmarks = config.landmark_weight > 0 and f_a is not None
 
-    def query_rows(rows: slice) -> list:
-        a = b_a[rows, :p]  # read once: a basis interpolated from a proxy is interpolated as it is read
-        parts = [a @ c_ab]
-        if total > 0:
-            parts += [np.sqrt(total) * a[:, :k], np.zeros((len(a), 1))]
+    def query_rows(rows: slice) -> tuple:
+        parts = [b_a[rows, :p]]  # read once: a basis interpolated from a proxy is interpolated as it is read
         if landmarks:
             parts.append(config.landmark_weight * f_a[rows])
         if g_a is not None:
             parts.append(g_a[rows])
-        return parts
+        return parts, None
 
-    def reference_rows(rows: slice) -> list:
-        parts = [b_b[rows, :k]] if total <= 0 else []
+    def reference_rows(rows: slice) -> tuple:
+        b = b_b[rows, :p]
+        folded = b[:, :k] @ c_ab.T  # (a C_ab) . b_k = a . (C_ab b_k)
+        offsets = np.einsum("ij,ij->i", b[:, :k], b[:, :k])
         if total > 0:
             # Both terms compare b_a[i] with a row of b: w1 |a - x_j|^2 + w2 |a - y_j|^2 equals
-            # (w1 + w2) |a - m_j|^2 + w1 w2 / (w1 + w2) |x_j - y_j|^2 with m_j their weighted mean:
-            # one block of k columns and one column carrying the j-only part, not two blocks.
-            b = b_b[rows, :p]
+            # (w1 + w2) |a - m_j|^2 + w1 w2 / (w1 + w2) |x_j - y_j|^2 with m_j their weighted mean.
             x, y = b @ c_ba, b[:, :k] @ c_ab[:k].T
-            parts += [b[:, :k], (w1 * x + w2 * y) / np.sqrt(total), np.sqrt(w1 * w2 / total) * np.linalg.norm(x - y, axis=1)[:, None]]
-        if landmarks:
-            parts.append(config.landmark_weight * f_b[rows])
-        if g_b is not None:
-            parts.append(g_b[rows])
-        return parts
+            pulled = w1 * x + w2 * y  # (w1 + w2) m_j
+            folded[:, :k] += pulled
+            offsets += (np.einsum("ij,ij->i", pulled, pulled) + w1 * w2 * np.einsum("ij,ij->i", x - y, x - y)) / total
+        parts = [folded]
+        for extra in ((config.landmark_weight * f_b[rows]) if landmarks else None,
+                      None if g_b is None else g_b[rows]):
+            if extra is not None:
+                parts.append(extra)
+                offsets += np.einsum("ij,ij->i", extra, extra)
+        return parts, offsets
 
-    return _rows_by_blocks(query_rows, len(b_a), dtype), _rows_by_blocks(reference_rows, len(b_b), dtype)
+    queries, _ = _rows_by_blocks(query_rows, len(b_a), dtype)
+    references, offsets = _rows_by_blocks(reference_rows, len(b_b), dtype)
+    return MapSearch(queries, references, offsets)
 
 
 # Rows of an embedding computed at once: the double-precision terms of a block, not of a whole
@@ -210,20 +243,24 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
 EMBEDDING_BLOCK_ROWS = 16384
 
 
-def _rows_by_blocks(parts_of, n: int, dtype) -> np.ndarray:
-    """``(n, d)`` of ``dtype``: the columns ``parts_of(rows)`` gives for each block of rows (each
-    term computed in double precision, then converted), side by side."""
-    out = None
+def _rows_by_blocks(parts_of, n: int, dtype) -> tuple:
+    """``(rows (n, d) of dtype, values (n,) or None)``: the columns ``parts_of(rows)`` gives for
+    each block of rows (each term computed in double precision, then converted), side by side,
+    and the block's values (``(parts, values or None)`` from ``parts_of``), end to end."""
+    out = values = None
     for first in range(0, max(n, 1), EMBEDDING_BLOCK_ROWS):
         rows = slice(first, min(first + EMBEDDING_BLOCK_ROWS, n))
-        parts = parts_of(rows)
+        parts, block_values = parts_of(rows)
         if out is None:
             out = np.empty((n, sum(part.shape[1] for part in parts)), dtype)
+            values = None if block_values is None else np.empty(n)
         column = 0
         for part in parts:
             out[rows, column:column + part.shape[1]] = part
             column += part.shape[1]
-    return out
+        if values is not None:
+            values[rows] = block_values
+    return out, values
 
 
 def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21: np.ndarray,
@@ -271,10 +308,8 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
         if i < len(sizes) - 1:
             g_1, g_2 = (coarse_1, coarse_2) if k <= config.signature_until else (None, None)
             g_1, g_2 = _joined(g_1, steady_1), _joined(g_2, steady_2)
-            q, r = map_embeddings(b1, b2, c_12, c_21, config, coords_1, coords_2, g_1, g_2)
-            map_12 = nearest_rows(r, q)
-            q, r = map_embeddings(b2, b1, c_21, c_12, config, coords_2, coords_1, g_2, g_1)
-            map_21 = nearest_rows(r, q)
+            map_12 = map_embeddings(b1, b2, c_12, c_21, config, coords_1, coords_2, g_1, g_2).nearest()
+            map_21 = map_embeddings(b2, b1, c_21, c_12, config, coords_2, coords_1, g_2, g_1).nearest()
     return c_12, c_21
 
 
@@ -296,10 +331,10 @@ def read_out_map(shape_2, basis_1: np.ndarray, basis_2: np.ndarray, c_12: np.nda
     (``sample_2``, see :func:`darcyan.geometry.knn.nearest_rows_near`); with the source's
     ZoomOut samples ``sample_1`` and vertex positions ``positions_1 (n1, 3)``, that sample is
     sought near the image of the source sample nearest each vertex."""
-    # Single precision, as the brute-force search reads them (half the memory of a large mesh's);
-    # with k <= KDTREE_MAX_DIM the rows may be few enough for a k-d tree, which reads double.
-    dtype = np.float32 if c_12.shape[1] > KDTREE_MAX_DIM else np.float64
-    q, r = map_embeddings(basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, steady_1, steady_2, dtype=dtype)
+    # Single precision, as the search reads them (half the memory of a large mesh's).
+    search = map_embeddings(basis_1, basis_2, c_12, c_21, config, coords_1, coords_2, steady_1, steady_2,
+                            dtype=np.float32)
+    q, r = search.queries, search.references
     mesh_2 = shape_2.mesh
     if mesh_2.n_vertices > config.local_search_above and len(sample_2) < mesh_2.n_vertices:
         # The search's cells: as many as ZoomOut's samples, drawn over the vertices (not the
@@ -313,11 +348,11 @@ def read_out_map(shape_2, basis_1: np.ndarray, basis_2: np.ndarray, c_12: np.nda
             # samples' own map: a search among the samples alone), not among all cells.
             from scipy.spatial import cKDTree
 
-            images = nearest_rows(r[cells], q[sample_1])
+            images = nearest_rows(r[cells], q[sample_1], search.offsets[cells])
             guess = images[cKDTree(positions_1[sample_1]).query(positions_1, workers=own_threads())[1]]
         return nearest_rows_near(r, q, mesh_2.vertices, cells, config.local_search_reach, guess,
-                                 config.local_search_guess * config.local_search_reach)
-    return nearest_rows(r, q)
+                                 config.local_search_guess * config.local_search_reach, search.offsets)
+    return search.nearest()
 
 
 def consensus_map(positions: np.ndarray, maps: list) -> np.ndarray:

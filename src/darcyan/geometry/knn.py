@@ -4,8 +4,9 @@
   ties broken by the smallest index; for the few thousand points of the mirror test.
 - :func:`nearest_neighbours`: each point's k nearest others among a few hundred points.
 - :func:`nearest_rows`: any size; a k-d tree (scipy) in few dimensions, blocked single-precision
-  brute force in many (spectral embeddings of dense maps); :func:`nearest_rows_near`, the same
-  searched coarse to fine over a surface (large dense maps; nearly exact, see there).
+  brute force in many (spectral embeddings of dense maps), also in inner-product form (rows
+  whose norms were folded into offsets); :func:`nearest_rows_near`, the same searched coarse to
+  fine over a surface (large dense maps; nearly exact, see there).
 """
 
 from __future__ import annotations
@@ -79,17 +80,20 @@ def nearest_neighbours(points: np.ndarray, k: int) -> np.ndarray:
     return np.take_along_axis(near, order, axis=1)[:, 1:]
 
 
-def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
-    """``(q,) int64``: for each row of ``queries (q, d)``, the nearest row of ``reference (n, d)``.
+def nearest_rows(reference: np.ndarray, queries: np.ndarray, offsets: np.ndarray | None = None) -> np.ndarray:
+    """``(q,) int64``: for each row of ``queries (q, d)``, the nearest row of ``reference (n, d)``;
+    with ``offsets (n,)``, the row ``j`` minimizing ``offsets[j] - 2 q . reference[j]`` instead
+    (``offsets`` ``|reference[j]|^2`` is the nearest row: the inner-product form lets a caller
+    fold parts of its rows into the offsets, see :class:`~darcyan.dense.zoomout.MapSearch`).
 
-    A k-d tree in few dimensions; in many, brute force in single precision by blocks of queries
-    (memory ``block x n`` per thread beside the single-precision copies, never ``q x n``;
-    single-precision inputs are not copied), the blocks on :func:`~darcyan.parallel.own_threads`
-    threads.
+    A k-d tree in few dimensions (without offsets); else brute force in single precision by
+    blocks of queries (memory ``block x n`` per thread beside the single-precision copies, never
+    ``q x n``; single-precision inputs are not copied), the blocks on
+    :func:`~darcyan.parallel.own_threads` threads.
     """
     from ..parallel import map_blocks, own_threads
 
-    if np.shape(reference)[1] <= KDTREE_MAX_DIM:
+    if offsets is None and np.shape(reference)[1] <= KDTREE_MAX_DIM:
         from scipy.spatial import cKDTree
 
         reference = np.ascontiguousarray(reference, dtype=np.float64)
@@ -98,7 +102,9 @@ def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
     reference = np.ascontiguousarray(reference, dtype=np.float32)
     queries = np.ascontiguousarray(queries, dtype=np.float32)
     # One matrix product per block gives |r|^2 - 2 q.r directly: [-2 q, 1] @ [r, |r|^2]^T.
-    right = np.vstack([reference.T, np.einsum("ij,ij->i", reference, reference)[None]])
+    if offsets is None:
+        offsets = np.einsum("ij,ij->i", reference, reference)
+    right = np.vstack([reference.T, np.asarray(offsets, dtype=np.float32)[None]])
     out = np.empty(len(queries), dtype=np.int64)
 
     def search(start: int) -> None:  # the same blocks whatever the threads: the same bits
@@ -111,7 +117,8 @@ def nearest_rows(reference: np.ndarray, queries: np.ndarray) -> np.ndarray:
 
 
 def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.ndarray, coarse: np.ndarray,
-                      reach: int, guess: np.ndarray | None = None, guess_reach: int | None = None) -> np.ndarray:
+                      reach: int, guess: np.ndarray | None = None, guess_reach: int | None = None,
+                      offsets: np.ndarray | None = None) -> np.ndarray:
     """``(q,) int64``: for each row of ``queries (q, d)``, the nearest row of ``reference (n, d)``
     among those lying near its nearest *coarse* row: a coarse-to-fine :func:`nearest_rows` for
     embeddings of surface points, in ``O(q (m + reach n / m) d)`` instead of ``O(q n d)``.
@@ -129,6 +136,8 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
     nearest sample is then sought only among the ``guess_reach`` (default ``reach``) samples
     nearest the guess (in space), not among all m: ``O(q guess_reach d)`` instead of
     ``O(q m d)``, the larger cost on a large mesh.
+
+    ``offsets (n,)``, when given: "nearest" in :func:`nearest_rows`'s inner-product form.
     """
     from scipy.spatial import cKDTree
 
@@ -144,10 +153,11 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
     bounds = np.searchsorted(cell[by_cell], np.arange(len(coarse) + 1))
     if guess is not None and len(guess) and (np.min(guess) < 0 or np.max(guess) >= len(coarse)):
         raise ValueError(f"nearest_rows_near: a guess outside the {len(coarse)} coarse samples")
-    nearest_sample = nearest_rows(reference[coarse], queries) if guess is None else \
+    ref_sq = np.einsum("ij,ij->i", reference, reference) if offsets is None else np.asarray(offsets, np.float32)
+    nearest_sample = nearest_rows(reference[coarse], queries, ref_sq[coarse]) if guess is None else \
         _nearest_around(reference[coarse], queries, np.asarray(guess, dtype=np.int64),
-                        tree.query(positions[coarse], k=min(guess_reach or reach, len(coarse)))[1].reshape(len(coarse), -1))
-    ref_sq = np.einsum("ij,ij->i", reference, reference)
+                        tree.query(positions[coarse], k=min(guess_reach or reach, len(coarse)))[1].reshape(len(coarse), -1),
+                        ref_sq[coarse])
     out = np.empty(len(queries), dtype=np.int64)
     by_query = np.argsort(nearest_sample, kind="stable")
     starts = np.searchsorted(nearest_sample[by_query], np.arange(len(coarse) + 1))
@@ -169,21 +179,22 @@ def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.
     return out
 
 
-def _nearest_around(samples: np.ndarray, queries: np.ndarray, guess: np.ndarray, around: np.ndarray) -> np.ndarray:
+def _nearest_around(samples: np.ndarray, queries: np.ndarray, guess: np.ndarray, around: np.ndarray,
+                    offsets: np.ndarray) -> np.ndarray:
     """``(q,)`` for each query the nearest of the rows of ``samples (m, d)`` listed in
     ``around[guess[i]]`` (``around (m, r)``: each sample's neighbours, itself first), by groups of
-    queries sharing a guess."""
+    queries sharing a guess; nearest in :func:`nearest_rows`'s inner-product form with
+    ``offsets (m,)``."""
     from ..parallel import map_blocks
 
     out = np.empty(len(queries), dtype=np.int64)
     order = np.argsort(guess, kind="stable")
     starts = np.searchsorted(guess[order], np.arange(len(samples) + 1))
-    samples_sq = np.einsum("ij,ij->i", samples, samples)
 
     def search(g: int) -> None:
         members = order[starts[g]:starts[g + 1]]
         near = around[g]
-        scores = samples_sq[near][None, :] - 2.0 * (queries[members] @ samples[near].T)
+        scores = offsets[near][None, :] - 2.0 * (queries[members] @ samples[near].T)
         out[members] = near[np.argmin(scores, axis=1)]
 
     map_blocks(search, np.flatnonzero(np.diff(starts)).tolist())
