@@ -37,7 +37,12 @@ def test_nearest_neighbours_equal_a_kd_tree():
 
 
 @pytest.mark.parametrize("dim", [3, 40])
-def test_nearest_rows_agrees_with_brute_force(dim):
+@pytest.mark.parametrize("tree_from", [0, None])  # few dimensions: the k-d tree, or numpy's exact search
+def test_nearest_rows_agrees_with_brute_force(dim, tree_from, monkeypatch):
+    import darcyan.geometry.knn as knn
+
+    if tree_from is not None:
+        monkeypatch.setattr(knn, "KDTREE_MIN_PAIRS", tree_from)
     rng = np.random.default_rng(dim)
     reference, queries = rng.normal(size=(500, dim)), rng.normal(size=(200, dim))
     expected = np.argmin(((queries[:, None, :] - reference[None]) ** 2).sum(axis=2), axis=1)

@@ -1,7 +1,8 @@
 """Nearest-neighbour searches, exact, in memory O(queries x block) or O(points).
 
 - :func:`nearest_points`: numpy only (a cached match imports no scipy), float64, exact with
-  ties broken by the smallest index; for the few thousand points of the mirror test.
+  ties broken by the smallest index; for the few thousand points of the mirror test, and a
+  small mesh's searches in few dimensions.
 - :func:`nearest_neighbours`: each point's k nearest others among a few hundred points.
 - :func:`nearest_rows`: any size; a k-d tree (scipy) in few dimensions, blocked single-precision
   brute force in many (spectral embeddings of dense maps), also in inner-product form (rows
@@ -16,6 +17,10 @@ import numpy as np
 # Nearest rows: a k-d tree up to this dimension, blocked brute force above it (in 15 dimensions
 # scipy's k-d tree took 9 s for 3000 queries among 50k rows, brute force 0.3 s).
 KDTREE_MAX_DIM = 6
+# ... and the tree only when queries x rows exceed this: below it (7k x 7k), the exact numpy search
+# (nearest_points: 0.04 s for 5k x 5k in 6 dimensions, the tree 0.03 s) costs less than importing
+# scipy.spatial (0.25-0.35 s, scipy.special and scipy.constants with it) once for a 5k dense map.
+KDTREE_MIN_PAIRS = 50_000_000
 # Queries per block of the brute force: a (256, n) block stays in cache (3x faster than one big block).
 NN_BLOCK_ROWS = 256
 
@@ -86,14 +91,17 @@ def nearest_rows(reference: np.ndarray, queries: np.ndarray, offsets: np.ndarray
     (``offsets`` ``|reference[j]|^2`` is the nearest row: the inner-product form lets a caller
     fold parts of its rows into the offsets, see :class:`~darcyan.dense.zoomout.MapSearch`).
 
-    A k-d tree in few dimensions (without offsets); else brute force in single precision by
-    blocks of queries (memory ``block x n`` per thread beside the single-precision copies, never
+    In few dimensions (without offsets): exact, in double precision, by
+    :func:`nearest_points` when queries x rows are at most ``KDTREE_MIN_PAIRS``, else by a k-d
+    tree; in many, brute force in single precision by blocks of queries (memory ``block x n`` per thread beside the single-precision copies, never
     ``q x n``; single-precision inputs are not copied), the blocks on
     :func:`~darcyan.parallel.own_threads` threads.
     """
     from ..parallel import map_blocks, own_threads
 
     if offsets is None and np.shape(reference)[1] <= KDTREE_MAX_DIM:
+        if len(reference) * len(queries) <= KDTREE_MIN_PAIRS:
+            return nearest_points(reference, queries)
         from scipy.spatial import cKDTree
 
         reference = np.ascontiguousarray(reference, dtype=np.float64)
