@@ -93,9 +93,9 @@ def nearest_rows(reference: np.ndarray, queries: np.ndarray, offsets: np.ndarray
 
     In few dimensions (without offsets): exact, in double precision, by
     :func:`nearest_points` when queries x rows are at most ``KDTREE_MIN_PAIRS``, else by a k-d
-    tree; in many, brute force in single precision by blocks of queries (memory ``block x n`` per thread beside the single-precision copies, never
-    ``q x n``; single-precision inputs are not copied), the blocks on
-    :func:`~darcyan.parallel.own_threads` threads.
+    tree; in many, brute force in single precision by blocks of queries (memory ``block x n``
+    per thread beside the single-precision copies, never ``q x n``; single-precision inputs are
+    not copied), the blocks on :func:`~darcyan.parallel.own_threads` threads.
     """
     from ..parallel import map_blocks, own_threads
 
