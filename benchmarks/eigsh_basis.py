@@ -1,0 +1,64 @@
+"""How long the dense basis's eigensolve takes with ARPACK's Lanczos basis of different sizes
+(``ncv``): the measurement behind "tried and left out" in ``docs/decisions/speed.md``.
+
+    python benchmarks/eigsh_basis.py                       # a few meshes of faust-5k and tosca-5k
+    python benchmarks/eigsh_basis.py A.off B.off --k 130 --repeat 3
+
+Each mesh is prepared as darcyan prepares it; the k smallest eigenpairs of its cotangent
+Laplacian are solved as :func:`darcyan.geometry.spectral.laplace_beltrami_spectrum` solves them
+(shift-invert about the dense basis's shift, the dense basis's tolerance, the fixed start), once
+per ``ncv``; the table prints the best of ``--repeat`` runs per mesh and the sums.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from speed import DATA  # benchmarks/speed.py: the data folder
+
+
+def main(argv: list | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("meshes", nargs="*", help="mesh files (default: six of faust-5k and tosca-5k)")
+    parser.add_argument("--k", type=int, default=130, help="eigenpairs (the dense basis: 120 + 10)")
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args(argv)
+    import scipy.sparse as sp
+    from scipy.sparse.linalg import eigsh
+
+    from darcyan.config import DenseConfig
+    from darcyan.dense.zoomout import EIGSH_SHIFT
+    from darcyan.geometry.shape import prepare_shape
+    from darcyan.geometry.spectral import START_SEED, laplacian_operators
+    from darcyan.io.mesh_files import load_mesh
+
+    meshes = args.meshes or [str(DATA / f) for f in ("faust-5k/tr_reg_000.off", "faust-5k/tr_reg_001.off",
+                                                     "tosca-5k/cat0.off", "tosca-5k/david1.off",
+                                                     "tosca-5k/dog6.off", "tosca-5k/michael1.off")]
+    choices = {"2k+1 (ARPACK's default)": None, "1.5k": int(1.5 * args.k), "1.25k": int(1.25 * args.k)}
+    sums = dict.fromkeys(choices, 0.0)
+    print("| mesh | vertices | " + " | ".join(choices) + " |")
+    print("| --- | ---: |" + " ---: |" * len(choices))
+    for path in meshes:
+        mesh = prepare_shape(load_mesh(path)).mesh
+        stiffness, mass = laplacian_operators(mesh)
+        start = np.random.default_rng(START_SEED).uniform(-1.0, 1.0, mesh.n_vertices)
+        row = []
+        for name, ncv in choices.items():
+            best = np.inf
+            for _ in range(args.repeat):
+                t = time.perf_counter()
+                eigsh(stiffness, k=args.k, M=sp.diags(mass).tocsc(), sigma=EIGSH_SHIFT, which="LM",
+                      tol=DenseConfig().basis_tolerance, v0=start, ncv=ncv)
+                best = min(best, time.perf_counter() - t)
+            sums[name] += best
+            row.append(f"{best:.3f} s")
+        print(f"| {path.rsplit('/', 1)[-1]} | {mesh.n_vertices} | " + " | ".join(row) + " |")
+    print("| **sum** | | " + " | ".join(f"**{v:.3f} s**" for v in sums.values()) + " |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
