@@ -9,6 +9,7 @@ root of the shape's area whatever the file's units. The defaults and how they we
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import inspect
 import json
@@ -784,10 +785,16 @@ def _stage_of(config, dotted: str) -> str:
 def field_docs(cls) -> dict:
     """``{field: text}``: each field's documentation, from the ``Attributes:`` section of
     ``cls``'s docstring (an entry ``a, b: text`` documents both); what the command-line help and
-    the settings reference show, so that it is written once."""
+    the settings reference show, so that it is written once. Read once per class (the command
+    line asks for every option's)."""
+    return dict(_field_docs(cls))
+
+
+@functools.lru_cache(maxsize=None)
+def _field_docs(cls) -> tuple:
     doc = inspect.cleandoc(cls.__doc__ or "")
     if "Attributes:" not in doc:
-        return {}
+        return ()
     out: dict = {}
     names: list = []
     for line in doc.split("Attributes:", 1)[1].splitlines():
@@ -803,7 +810,7 @@ def field_docs(cls) -> dict:
         elif names:
             for name in names:
                 out[name] += " " + line.strip()
-    return out
+    return tuple(out.items())
 
 
 def field_summary(cls, name: str) -> str:
