@@ -109,6 +109,44 @@ def test_zoomout_with_a_margin_keeps_the_true_map_of_a_renumbered_copy(figure_po
             == truth_12).all()
 
 
+@pytest.mark.slow
+def test_the_coarse_to_fine_read_out_finds_the_true_map_as_the_full_one(figure_poses):
+    # The read-out of a large target searches near each image's nearest sample (cells of the
+    # ZoomOut samples, with and without the guess from the source's samples), in the search's
+    # inner-product form: from the true functional maps of a renumbered copy it must find the
+    # true map, as the full search does; offsets left out of the coarse level would not.
+    import darcyan.dense.zoomout as zoomout_module
+    from darcyan.dense.zoomout import read_out_map, zoomout
+    from darcyan.geometry.shape import prepare_shape
+
+    mesh = figure_poses[0]
+    order = np.random.default_rng(8).permutation(mesh.n_vertices)
+    shape, copy = prepare_shape(mesh), prepare_shape(Mesh(mesh.vertices[order], np.argsort(order)[mesh.faces]))
+    config = DenseConfig(basis_start=10, basis_size=20, basis_step=5, basis_margin=6, margin_from=15,
+                         landmark_weight=0, signature_weight=0, signature_turns=0)
+    basis_1, basis_2 = shape.spectrum(26).vectors, copy.spectrum(26).vectors
+    truth_12, truth_21 = np.argsort(order), order
+    c_12, c_21 = zoomout(basis_1, basis_2, truth_12, truth_21, config)
+    none = np.zeros((mesh.n_vertices, 0)), np.zeros((copy.n_vertices, 0))
+    rng = np.random.default_rng(0)
+    sample_1 = np.sort(rng.choice(mesh.n_vertices, 400, replace=False))
+    sample_2 = np.sort(rng.choice(copy.n_vertices, 400, replace=False))
+    local = dataclasses.replace(config, local_search_above=0)
+    full = read_out_map(copy, basis_1, basis_2, c_12, c_21, config, *none, sample_2)
+    assert (full == truth_12).mean() > 0.99
+    for guess in ({}, {"sample_1": sample_1, "positions_1": shape.mesh.vertices}):
+        found = read_out_map(copy, basis_1, basis_2, c_12, c_21, local, *none, sample_2, **guess)
+        assert (found == full).mean() > 0.99
+    # Without the offsets the coarse level's choices are not the nearest samples: it can fail.
+    real = zoomout_module.nearest_rows_near
+    zoomout_module.nearest_rows_near = lambda *args: real(*args[:-1])
+    try:
+        dropped = read_out_map(copy, basis_1, basis_2, c_12, c_21, local, *none, sample_2)
+    finally:
+        zoomout_module.nearest_rows_near = real
+    assert (dropped == full).mean() < 0.99
+
+
 def test_commutativity_shrinks_by_the_squared_relative_gap_of_the_eigenvalues():
     from darcyan.dense.zoomout import commutativity_shrinkage
 

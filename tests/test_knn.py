@@ -36,17 +36,64 @@ def test_nearest_neighbours_equal_a_kd_tree():
     np.testing.assert_array_equal(nearest_neighbours(points, 6), expected)
 
 
-@pytest.mark.parametrize("dim", [3, 40])
-@pytest.mark.parametrize("tree_from", [0, None])  # few dimensions: the k-d tree, or numpy's exact search
-def test_nearest_rows_agrees_with_brute_force(dim, tree_from, monkeypatch):
+@pytest.mark.parametrize("dim, tree_from", [(3, 0), (3, None), (40, None)])  # 3: the k-d tree, or numpy's search
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_nearest_rows_agrees_with_brute_force(dim, tree_from, dtype, monkeypatch):
     import darcyan.geometry.knn as knn
 
     if tree_from is not None:
-        monkeypatch.setattr(knn, "KDTREE_MIN_PAIRS", tree_from)
+        monkeypatch.setattr(knn, "NUMPY_SEARCH_MAX_POINTS", tree_from)
     rng = np.random.default_rng(dim)
-    reference, queries = rng.normal(size=(500, dim)), rng.normal(size=(200, dim))
+    reference, queries = rng.normal(size=(500, dim)).astype(dtype), rng.normal(size=(200, dim)).astype(dtype)
+    expected = np.argmin(((queries[:, None, :] - reference[None]) ** 2).sum(axis=2), axis=1)
+    found = nearest_rows(reference, queries)
+    assert found.dtype == np.int64 and np.array_equal(found, expected)
+
+
+def test_nearest_rows_takes_a_k_d_tree_for_many_points_in_few_dimensions(monkeypatch):
+    # numpy's exact search holds a block of 64 queries x all points: beyond
+    # NUMPY_SEARCH_MAX_POINTS points (or queries) the k-d tree searches, in O(points) memory.
+    import darcyan.geometry.knn as knn
+
+    def refused(points, queries):
+        raise AssertionError("numpy's search on a large set")
+
+    monkeypatch.setattr(knn, "nearest_points", refused)
+    rng = np.random.default_rng(3)
+    reference = rng.normal(size=(knn.NUMPY_SEARCH_MAX_POINTS + 1, 3))
+    queries = rng.normal(size=(5, 3))
     expected = np.argmin(((queries[:, None, :] - reference[None]) ** 2).sum(axis=2), axis=1)
     assert np.array_equal(nearest_rows(reference, queries), expected)
+    with pytest.raises(AssertionError):
+        nearest_rows(reference[:100], queries)
+
+
+def test_nearest_rows_refuses_coordinates_that_are_not_finite():
+    reference, queries = np.zeros((5, 3)), np.ones((2, 3))
+    for bad in (np.nan, np.inf):
+        broken = reference.copy()
+        broken[2, 1] = bad
+        with pytest.raises(ValueError, match="not finite"):
+            nearest_rows(broken, queries)
+        with pytest.raises(ValueError, match="not finite"):
+            nearest_rows(queries, broken)
+    with pytest.raises(ValueError, match="not finite"):
+        nearest_rows(reference, queries, np.array([0.0, np.nan, 0.0, 0.0, 0.0]))
+
+
+def test_nearest_rows_with_offsets_in_few_dimensions_are_exact_in_double_precision():
+    # Rows a hair apart, away from the origin (offsets of about 200, gaps of 1e-8): single
+    # precision cannot tell them apart (its rounding of the offsets is 1e-5), double precision
+    # does, as the k-d tree did before offsets.
+    rng = np.random.default_rng(4)
+    reference = 10.0 + 1e-4 * rng.normal(size=(300, 2))
+    queries = 10.0 + 1e-4 * rng.normal(size=(100, 2))
+    offsets = (reference**2).sum(axis=1)
+    expected = np.argmin(((queries[:, None, :] - reference[None]) ** 2).sum(axis=2), axis=1)
+    assert np.array_equal(nearest_rows(reference, queries, offsets), expected)
+    single = np.argmin(offsets.astype(np.float32)[None] - 2 * queries.astype(np.float32) @ reference.T.astype(np.float32),
+                       axis=1)
+    assert not np.array_equal(single, expected)  # the case needs double precision
 
 
 @pytest.mark.parametrize("dim", [3, 40])

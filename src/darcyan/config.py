@@ -786,8 +786,8 @@ def field_docs(cls) -> dict:
     """``{field: text}``: each field's documentation, from the ``Attributes:`` section of
     ``cls``'s docstring (an entry ``a, b: text`` documents both); what the command-line help and
     the settings reference show, so that it is written once. Read once per class (the command
-    line asks for every option's)."""
-    return dict(_field_docs(cls))
+    line asks for every option's); an instance reads its class's."""
+    return dict(_field_docs(cls if isinstance(cls, type) else type(cls)))
 
 
 @functools.lru_cache(maxsize=None)

@@ -11,9 +11,8 @@ stiffness, mixed Voronoi mass, ``scipy.sparse.linalg.eigsh`` (:func:`dense_spect
 decimated proxy of a large mesh, interpolated).
 
 Memory stays O(V): the functional maps are (k + margin) x k, nearest neighbours are searched
-with a k-d tree (few dimensions) or by blocks of source rows (spectral dimensions), and on a
-large target near each image's nearest ZoomOut sample
-(:func:`darcyan.geometry.knn.nearest_rows_near`).
+by blocks of source rows (:class:`MapSearch`), and on a large target near each image's nearest
+ZoomOut sample (:func:`darcyan.geometry.knn.nearest_rows_near`).
 """
 
 from __future__ import annotations
@@ -153,7 +152,7 @@ class _Fitter:
         return self.r_inverse[:p, :p] @ (self.q[:, :p].T @ mapped)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class MapSearch:
     """A vertex map a -> b as a nearest-row search in inner-product form: query ``i``'s image is
     the reference row ``j`` minimizing ``offsets[j] - 2 queries[i] . references[j]``
@@ -162,7 +161,7 @@ class MapSearch:
     Attributes:
         queries: ``(n_a, d)`` a row per point of shape a.
         references: ``(n_b, d)`` a row per point of shape b.
-        offsets: ``(n_b,)`` what each reference row adds to every score.
+        offsets: ``(n_b,)`` float64, what each reference row adds to every score.
     """
 
     queries: np.ndarray
@@ -182,7 +181,7 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
     bijectivity and orthogonality residuals (and, with ``f_a (s_a, c)``, ``f_b (s_b, c)`` the
     landmark coordinates, their difference weighed by ``config.landmark_weight``; with ``g_a
     (s_a, d)``, ``g_b (s_b, d)``, those coordinates as they are). ``dtype``: of the rows returned
-    (each term computed in double precision, then converted).
+    (each term computed in double precision, then converted; the offsets stay double).
 
     ``c_ab (p, k)`` (p >= k: see ``DenseConfig.basis_margin``) pulls b's first k coefficients
     back to a's first p (``b_a[:, :p] C_ab ~ b_b[map, :k]``), ``c_ba (p, k)`` the reverse; the
@@ -193,13 +192,14 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
     holds near isometry, where that block carries the map, not an exact condition).
 
     The map is the Euclidean nearest row of embeddings that stack these terms: query ``[a C_ab,
-    sqrt(w) a_k, 0, f_a, g_a]`` against reference ``[b_k, m_j, s_j, f_b, g_b]`` (``w`` the two
-    terms' weights summed, ``m_j`` their weighted mean row and ``s_j`` what is left of them, a
-    number). Every term's product with a query is linear in ``a = b_a[i, :p]``, so the search
-    reads queries ``[a, f_a, g_a]`` against references ``[C_ab b_k + sqrt(w) m_j (padded), f_b,
-    g_b]`` with the reference's squared length as its offset (each query's own length is the
-    same for every ``j``): p + c + d columns instead of 2k + 1 + c + d, the same map up to
-    rounding.
+    sqrt(w) a_k, 0, l f_a, g_a]`` against reference ``[b_k, sqrt(w) m_j, s_j, l f_b, g_b]`` (``w``
+    the bijectivity and orthogonality weights summed, ``m_j`` the weighted mean of the rows
+    they compare ``a_k`` with, ``s_j`` what is left of them, a number; ``l`` the landmark
+    weight). Every product of a query with a reference is linear in ``a = b_a[i, :p]``, so the
+    search reads queries ``[a, l f_a, g_a]`` against references ``[C_ab b_k + w m_j (padded to
+    p columns), l f_b, g_b]`` with the squared length of the stacked reference row as its offset
+    (each query's own squared length is the same for every ``j`` and left out): p + c + d
+    columns instead of 2k + 1 + c + d, the same map up to rounding.
     """
     p, k = c_ab.shape
     w1, w2 = config.bijectivity ** 2, config.orthogonality ** 2
@@ -215,7 +215,7 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
         return parts, None
 
     def reference_rows(rows: slice) -> tuple:
-        b = b_b[rows, :p]
+        b = b_b[rows, :p] if total > 0 else b_b[rows, :k]  # read once (an interpolated basis is interpolated as read)
         folded = b[:, :k] @ c_ab.T  # (a C_ab) . b_k = a . (C_ab b_k)
         offsets = np.einsum("ij,ij->i", b[:, :k], b[:, :k])
         if total > 0:

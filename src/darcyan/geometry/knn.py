@@ -4,10 +4,11 @@
   ties broken by the smallest index; for the few thousand points of the mirror test, and a
   small mesh's searches in few dimensions.
 - :func:`nearest_neighbours`: each point's k nearest others among a few hundred points.
-- :func:`nearest_rows`: any size; a k-d tree (scipy) in few dimensions, blocked single-precision
-  brute force in many (spectral embeddings of dense maps), also in inner-product form (rows
-  whose norms were folded into offsets); :func:`nearest_rows_near`, the same searched coarse to
-  fine over a surface (large dense maps; nearly exact, see there).
+- :func:`nearest_rows`: any size; in few dimensions :func:`nearest_points` for small sets, else a
+  k-d tree (scipy); blocked single-precision brute force in many (spectral embeddings of dense
+  maps), also in inner-product form (rows whose norms were folded into offsets);
+  :func:`nearest_rows_near`, the same searched coarse to fine over a surface (large dense maps;
+  nearly exact, see there).
 """
 
 from __future__ import annotations
@@ -17,10 +18,11 @@ import numpy as np
 # Nearest rows: a k-d tree up to this dimension, blocked brute force above it (in 15 dimensions
 # scipy's k-d tree took 9 s for 3000 queries among 50k rows, brute force 0.3 s).
 KDTREE_MAX_DIM = 6
-# ... and the tree only when queries x rows exceed this: below it (7k x 7k), the exact numpy search
-# (nearest_points: 0.04 s for 5k x 5k in 6 dimensions, the tree 0.03 s) costs less than importing
-# scipy.spatial (0.25-0.35 s, scipy.special and scipy.constants with it) once for a 5k dense map.
-KDTREE_MIN_PAIRS = 50_000_000
+# ... and the tree only when the points or the queries are more than this: up to it, the exact
+# numpy search (nearest_points: 0.04 s for 5k x 5k in 6 dimensions, the tree 0.03 s; its block of
+# 64 x 7k distances 3.6 MB) costs less than importing scipy.spatial (0.05 s on an idle machine,
+# 0.3-0.7 s beside a busy core; scipy.special and scipy.constants come with it) for a 5k dense map.
+NUMPY_SEARCH_MAX_POINTS = 7000
 # Queries per block of the brute force: a (256, n) block stays in cache (3x faster than one big block).
 NN_BLOCK_ROWS = 256
 
@@ -91,37 +93,49 @@ def nearest_rows(reference: np.ndarray, queries: np.ndarray, offsets: np.ndarray
     (``offsets`` ``|reference[j]|^2`` is the nearest row: the inner-product form lets a caller
     fold parts of its rows into the offsets, see :class:`~darcyan.dense.zoomout.MapSearch`).
 
-    In few dimensions (without offsets): exact, in double precision, by
-    :func:`nearest_points` when queries x rows are at most ``KDTREE_MIN_PAIRS``, else by a k-d
-    tree; in many, brute force in single precision by blocks of queries (memory ``block x n``
-    per thread beside the single-precision copies, never ``q x n``; single-precision inputs are
+    In few dimensions (at most ``KDTREE_MAX_DIM``), in double precision: without offsets exact,
+    by :func:`nearest_points` when neither the rows nor the queries are more than
+    ``NUMPY_SEARCH_MAX_POINTS``, else by a k-d tree; with offsets by brute force. In many, brute
+    force in single precision. The brute force runs by blocks of queries (memory ``block x n``
+    per thread beside the converted copies, never ``q x n``; inputs already of its precision are
     not copied), the blocks on :func:`~darcyan.parallel.own_threads` threads.
+
+    Raises:
+        ValueError: for coordinates or offsets that are not finite (no row is nearest then).
     """
     from ..parallel import map_blocks, own_threads
 
-    if offsets is None and np.shape(reference)[1] <= KDTREE_MAX_DIM:
-        if len(reference) * len(queries) <= KDTREE_MIN_PAIRS:
+    few = np.shape(reference)[1] <= KDTREE_MAX_DIM
+    dtype = np.float64 if few else np.float32
+    reference = np.ascontiguousarray(reference, dtype=dtype)
+    queries = np.ascontiguousarray(queries, dtype=dtype)
+    if not all(_finite(a) for a in (reference, queries, offsets)):
+        raise ValueError("nearest rows: coordinates that are not finite (NaN or infinite)")
+    if offsets is None and few:
+        if max(len(reference), len(queries)) <= NUMPY_SEARCH_MAX_POINTS:
             return nearest_points(reference, queries)
         from scipy.spatial import cKDTree
 
-        reference = np.ascontiguousarray(reference, dtype=np.float64)
-        queries = np.ascontiguousarray(queries, dtype=np.float64)
         return cKDTree(reference).query(queries, workers=own_threads())[1].astype(np.int64)
-    reference = np.ascontiguousarray(reference, dtype=np.float32)
-    queries = np.ascontiguousarray(queries, dtype=np.float32)
     # One matrix product per block gives |r|^2 - 2 q.r directly: [-2 q, 1] @ [r, |r|^2]^T.
     if offsets is None:
         offsets = np.einsum("ij,ij->i", reference, reference)
-    right = np.vstack([reference.T, np.asarray(offsets, dtype=np.float32)[None]])
+    right = np.vstack([reference.T, np.asarray(offsets, dtype=dtype)[None]])
     out = np.empty(len(queries), dtype=np.int64)
 
     def search(start: int) -> None:  # the same blocks whatever the threads: the same bits
         rows = queries[start:start + NN_BLOCK_ROWS]
-        left = np.hstack([-2.0 * rows, np.ones((len(rows), 1), np.float32)])
+        left = np.hstack([-2.0 * rows, np.ones((len(rows), 1), dtype)])
         out[start:start + len(rows)] = np.matmul(left, right).argmin(axis=1)
 
     map_blocks(search, list(range(0, len(queries), NN_BLOCK_ROWS)))
     return out
+
+
+def _finite(values: np.ndarray | None) -> bool:
+    """Whether every entry of ``values`` is finite (``None``: yes), in one pass without a mask as
+    large as the array: a NaN or an infinity makes the double-precision sum non-finite."""
+    return values is None or bool(np.isfinite(np.sum(values, dtype=np.float64)))
 
 
 def nearest_rows_near(reference: np.ndarray, queries: np.ndarray, positions: np.ndarray, coarse: np.ndarray,
