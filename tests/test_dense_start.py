@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 from conftest import DENSE_MAX_MEAN, DENSE_MIN_RATE, DENSE_SCORED, FAST_DENSE, moved_and_mirrored_tip_fields, tip_correspondence
 
+from darcyan.api import matches_of_map
 from darcyan.cli import main
 from darcyan.dense.landmarks import orientation_coordinates
-from darcyan.dense.maps import dense_map
+from darcyan.dense.maps import dense_map, matching_of_map
 from darcyan.dense.start import map_orientation, spectral_matching
 from darcyan.dense.zoomout import dense_basis, zoomout_samples
 from darcyan.eval.dense_scores import evaluate_dense
@@ -92,6 +93,21 @@ def test_a_wrong_matching_gives_way_to_the_start_without_landmarks(figure_pair):
     assert rate(result) >= DENSE_MIN_RATE
     alone = dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, start_in_doubt=False))
     assert alone.check.start == "matches" and not alone.check.trusted and rate(alone) < 0.2
+    # The feature matches are read back from the map that won: right (the shared numbering) where
+    # the wrong matching had none right, that matching kept as the first alternative.
+    read = matching_of_map(wrong, result, shape_1.description, shape_2.description, shape_2.shape)
+    assert len(read) >= 3 and read.alternatives[0] is wrong
+    assert max(_errors(shape_2, read)) < 0.05 and min(_errors(shape_2, wrong)) > 0.05
+    assert matches_of_map(wrong, result, shape_1.description, shape_2.description, shape_2.shape).source_vertex.tolist() \
+        == read.source_vertex.tolist()
+    assert matches_of_map(wrong, result) is wrong  # without the descriptions: as they were
+
+
+def _errors(shape_2, matches) -> list:
+    """Geodesic error (sqrt(area) units) of each match on the figure's poses, whose vertex
+    numbering is shared (a source vertex's truth is the same vertex of the target)."""
+    solver, scale = shape_2.shape.solver, np.sqrt(shape_2.shape.mesh.area())
+    return [solver.distance(int(s))[int(t)] / scale for s, t in zip(matches.source_vertex, matches.target_vertex)]
 
 
 @pytest.mark.slow

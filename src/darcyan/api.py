@@ -235,19 +235,30 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
                                  progress=lambda stage: say(f"dense map: {stage}"))
             except DENSE_FAILURES as exc:  # one line, never a traceback
                 raise DarcyanError(f"{names[0]} -> {target}: no dense map: {exc}") from None
-            matches = matches_of_map(matches, made)
+            matches = matches_of_map(matches, made, descriptions[0], description, shape_of(index))
         shapes = (shape_of(0), shape_of(index)) if index in prepared else None
         pairs.append(PairResult(target, matches, made, verification, shapes))
     return Correspondences(names[0], tuple(pairs), tuple(descriptions), dense)
 
 
-def matches_of_map(matches: Correspondence, made: DenseMap) -> Correspondence:
+def matches_of_map(matches: Correspondence, made: DenseMap, description_1=None, description_2=None,
+                   shape_2: Shape | None = None) -> Correspondence:
     """The feature matches a dense map agrees with: ``matches`` itself, or the alternative
     matching that seeded the map instead (its own dense map contradicted the sparse one), the
-    others kept as its alternatives. A map started without the matches leaves them as they are."""
+    others kept as its alternatives. A map started without the matches (too few consistent
+    ones, or a rival start that won) gives the matches it reads itself
+    (:func:`~darcyan.dense.maps.matching_of_map`: the shapes' descriptions and the prepared
+    target needed; without them ``matches`` stay as they are)."""
+    from .dense.maps import matching_of_map
     from .dense.seeds import matching_of_seed
 
-    if made.check is None or made.check.start != "matches" or made.check.seed == 0:
+    if made.check is None:
+        return matches
+    if made.check.start != "matches":
+        if description_1 is None or description_2 is None or shape_2 is None:
+            return matches
+        return matching_of_map(matches, made, description_1, description_2, shape_2)
+    if made.check.seed == 0:
         return matches
     return matching_of_seed(matches, made.check.seed)
 

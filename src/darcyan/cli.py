@@ -273,10 +273,11 @@ def _seed_verdict(about: dict) -> str:
     rival = about.get("rival")
     if about.get("start") == "spectral" and rival is not None:
         return (f"started without the feature matches: the map from the matchings was not trusted, and landmarks "
-                f"from a short map started from {start_from} keep the shapes' curvature clearly better" + close)
+                f"from a short map started from {start_from} keep the shapes' curvature clearly better; the feature "
+                f"matches are read from the map" + close)
     if about.get("start") == "spectral":
         return (f"started without the feature matches (fewer than 3 consistent ones): landmarks from a short map "
-                f"started from {start_from}")
+                f"started from {start_from}; the feature matches are read from the map")
     lost = ""
     if rival is not None:
         signatures = about["signatures"]

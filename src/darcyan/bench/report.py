@@ -98,7 +98,8 @@ def summarize_dense(records: list) -> dict:
     ``within``, ``rate`` (within / samples, pooled), ``mean_error`` (over the mapped samples),
     ``curve`` (pooled cumulative curve over ``CURVE_TAUS``), ``seconds`` (sum of the dense
     stages), ``seconds_per_pair``, ``untrusted`` (maps whose own check doubts them) and
-    ``seed_rate`` (strict rate of the matchings that seeded darcyan's maps); overall also
+    ``seed_rate`` (strict rate of the feature matches darcyan's maps agree with: the matchings that
+    seeded them, or those a map started without them reads); overall also
     ``rate_class_mean``.
     """
     out = {}
@@ -271,8 +272,8 @@ def group_report(results: dict) -> list:
     lines = ["", "## Per group", "",
              ("Sparse: strict rate, rate allowing flips, mean geodesic error of the matches (sqrt(area) units); "
               "dense: share of sampled vertices within the threshold and their mean geodesic error; seed "
-              "rate: the strict rate of the matchings that seeded the dense maps (the sparse matches, or the "
-              "alternative the dense stage preferred)."), "",
+              "rate: the strict rate of the feature matches the dense maps agree with (the sparse matches, the "
+              "alternative the dense stage preferred, or those a map started without them reads)."), "",
              ("| group | method | pairs | sparse rate | rate_sym | sparse mean error | dense within | dense mean error "
               "| seed rate |"),
              "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]

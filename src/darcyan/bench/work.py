@@ -329,12 +329,14 @@ def _feature_truth(job: dict, target: Shape) -> tuple:
     return true_input, true_t, sym_t, target.mesh_index(tgt["features"], nearest=True)
 
 
-def _seed_score(job: dict, target: Shape, correspondence, seed: int) -> dict:
-    """The sparse score of the matching that seeded darcyan's dense map (the sparse matches, or
-    the alternative the dense stage preferred): ``seed_features``, ``seed_matches``, ``seed_correct``."""
+def _seed_score(job: dict, target: Shape, matching) -> dict:
+    """The sparse score of the feature matches darcyan's dense map agrees with (the sparse
+    matches, the alternative the dense stage preferred, or, for a map started without them,
+    the matches it reads, :func:`~darcyan.dense.maps.matching_of_map`): ``seed_features``,
+    ``seed_matches``, ``seed_correct``."""
     settings: BenchSettings = job["settings"]
     _, true_t, sym_t, target_features = _feature_truth(job, target)
-    matches = ([correspondence] + list(correspondence.alternatives))[seed].matches_12
+    matches = matching.matches_12
     score = score_pair(target.solver, target_features[matches.target], true_t, sym_t, target_features,
                        settings.threshold, match_rows=matches.source)
     return {"seed_features": score.features, "seed_matches": len(matches.source),
@@ -343,7 +345,7 @@ def _seed_score(job: dict, target: Shape, correspondence, seed: int) -> dict:
 
 def _dense_records(job: dict, target: Shape) -> list:
     """The dense maps of one pair (``job["dense_methods"]``), scored on the same sampled vertices."""
-    from ..dense.maps import DENSE_FAILURES, UNMAPPED, dense_map, pyfm_own_map
+    from ..dense.maps import DENSE_FAILURES, UNMAPPED, dense_map, matching_of_map, pyfm_own_map
     from ..eval.dense_scores import evaluate_dense_maps
     from ..eval.metrics import GroundTruth
     from ..method.pipeline import match_shapes
@@ -377,8 +379,12 @@ def _dense_records(job: dict, target: Shape) -> list:
                 info["landmarks"] = len(result.landmarks)
                 info["check"] = result.check.as_dict()
                 # how right the seed was (scored after the timing: it reads the ground truth)
-                if result.check.start == "matches":  # a spectral start has no sparse seed
-                    info.update(_seed_score(job, target, correspondence, result.check.seed))
+                if result.check.start == "matches":
+                    matching = ([correspondence] + list(correspondence.alternatives))[result.check.seed]
+                else:  # started without the matches: those it reads
+                    matching = matching_of_map(correspondence, result, job["source_rec"]["description"],
+                                               job["target_rec"]["description"], target)
+                info.update(_seed_score(job, target, matching))
         except DENSE_FAILURES as exc:
             seconds = time.perf_counter() - start
             if method not in maps:

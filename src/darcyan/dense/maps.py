@@ -289,6 +289,52 @@ def input_map(shape_1, shape_2, local: np.ndarray) -> np.ndarray:
     return target
 
 
+def matching_of_map(correspondence, made: DenseMap, description_1, description_2, shape_2):
+    """The feature matches that a dense map started without them reads: each feature point of
+    the source paired with the target's feature point nearest its image (geodesic distance on
+    the target), where that feature point's nearest image is this one's: mutual nearest, so no
+    distance threshold is needed, and a feature point whose image lies between two of the
+    target's, or nearer another's image, stays unmatched.
+
+    Args:
+        correspondence: the sparse matching (a :class:`~darcyan.method.pipeline.Correspondence`).
+        made: the dense map (:class:`DenseMap`, input numbering).
+        description_1, description_2: the shapes' :class:`~darcyan.method.pipeline.ShapeDescription`
+            (feature points in input numbering, their descriptors).
+        shape_2: the prepared target (:class:`~darcyan.geometry.shape.Shape`): its geodesics.
+
+    Returns:
+        a :class:`~darcyan.method.pipeline.Correspondence` whose distances are the descriptors'
+        (as the sparse stage measures them), with the sparse matching and its alternatives as
+        its alternatives, and the sparse matching's ``margin`` and ``in_doubt``.
+    """
+    from ..method.matching import Matches, descriptor_distances
+    from ..method.pipeline import Correspondence
+
+    images = made.target[np.asarray(description_1.feature_vertices, dtype=np.int64)]
+    mapped = np.flatnonzero(images != UNMAPPED)
+    targets = shape_2.mesh_index(np.asarray(description_2.feature_vertices, dtype=np.int64), nearest=True)
+    on_mesh = shape_2.mesh_index(images[mapped], nearest=True)
+    # (target features, mapped source features): distance from each target feature to each image
+    gaps = np.stack([shape_2.solver.distance(int(t))[on_mesh] for t in targets]) if len(mapped) else \
+        np.zeros((len(targets), 0))
+    keep = np.zeros(len(mapped), bool)
+    nearest_target = np.zeros(len(mapped), dtype=np.int64)
+    if gaps.size:
+        nearest_target = np.argmin(gaps, axis=0)  # per image, the target feature nearest it
+        nearest_image = np.argmin(gaps, axis=1)  # per target feature, the image nearest it
+        keep = (nearest_image[nearest_target] == np.arange(len(mapped))) \
+            & np.isfinite(gaps[nearest_target, np.arange(len(mapped))])
+    source, target = mapped[keep], nearest_target[keep]
+    distance = descriptor_distances(description_1.descriptors, description_2.descriptors)[source, target]
+    return Correspondence(np.asarray(description_1.feature_vertices)[source],
+                          np.asarray(description_2.feature_vertices)[target], distance,
+                          Matches(source, target, distance),
+                          alternatives=(correspondence, *getattr(correspondence, "alternatives", ())),
+                          margin=getattr(correspondence, "margin", np.inf),
+                          in_doubt=getattr(correspondence, "in_doubt", False))
+
+
 def map_check(shape_1, local: np.ndarray, distances_1, distances_2, turns_1, turns_2) -> tuple[float, float]:
     """How far a map ``local (n1,)`` (prepared numbering) keeps what its landmarks say:
     ``orientation``, the area-weighted correlation of the
