@@ -6,7 +6,9 @@ within 0.05: 80%) and those wholly wrong (at most 1%), the pooled share within 0
 geodesic error (x100, over mapped samples), how each map was started (``matches``, ``spectral`` when
 no matching gave three consistent landmarks, ``rival`` when the start without landmarks won over a
 map from the matches that was not trusted), and the table of trusted against right: a flag worth
-acting on marks no collapsed map trusted.
+acting on marks no collapsed map trusted. For the maps started without the feature matches, the
+sparse stage's matches against those read from the map (``seed_correct`` of the dense record:
+:func:`darcyan.dense.maps.matching_of_map`), right within 0.05.
 
     python benchmarks/trust_table.py out/faust-glued out/tosca-glued [--right 0.8]
 """
@@ -88,6 +90,7 @@ def main(argv=None) -> int:
         if len(values):
             print(f"\nalignment residual of {name} maps ({len(values)}): min {values.min():.4f}, median "
                   f"{np.median(values):.4f}, 95% {np.quantile(values, 0.95):.4f}, max {values.max():.4f}")
+    read_back(args.folders)
     baseline = [(folder, dense_records(folder, "pyfm")) for folder in args.folders]
     if any(records for _, records in baseline):  # pyFM's own pipeline in the same runs, for contrast
         print("\n| set | pyFM pairs | collapsed | wholly wrong | within | mean x100 |\n| --- | --- | --- | --- | --- | --- |")
@@ -97,6 +100,29 @@ def main(argv=None) -> int:
                 print(f"| {folder.name} | {row['pairs']} | {row['collapsed']} | {row['wholly wrong']} | "
                       f"{_cell(row['within'])} | {_cell(row['mean x100'])} |")
     return 0
+
+
+def read_back(folders: list) -> None:
+    """Prints, over the maps started without the feature matches, how many of the sparse stage's
+    matches were right and how many of those read from the map (bench records that have them)."""
+    sparse_right = sparse_count = read_right = read_count = better = worse = maps = 0
+    for folder in folders:
+        rows = [json.loads(line) for line in (folder / "pairs.jsonl").read_text().splitlines() if line.strip()]
+        sparse = {(r["source"], r["target"]): r for r in rows if r.get("kind") != "dense" and r.get("method") == "darcyan"}
+        for r in dense_records(folder):
+            first = sparse.get((r["source"], r["target"]))
+            if r.get("check", {}).get("start") != "spectral" or "seed_matches" not in r or first is None:
+                continue
+            maps += 1
+            sparse_right, sparse_count = sparse_right + first["correct"], sparse_count + first["matches"]
+            read_right, read_count = read_right + r["seed_correct"], read_count + r["seed_matches"]
+            before = first["correct"] / first["matches"] if first["matches"] else 0.0
+            after = r["seed_correct"] / r["seed_matches"] if r["seed_matches"] else 0.0
+            better, worse = better + (after > before), worse + (after < before)
+    if maps:
+        print(f"\nmaps started without the feature matches ({maps}): the sparse stage's matches {sparse_right} of "
+              f"{sparse_count} right, those read from the map {read_right} of {read_count}; pairs with a higher "
+              f"share right {better}, lower {worse}")
 
 
 def _cell(value) -> str:
