@@ -287,7 +287,7 @@ def _seed_verdict(about: dict) -> str:
                            "less closely: not taken"), ""
         else:
             lost = "; a start without the feature matches was weighed against it and did not score better"
-    if about["seeds"] - (about.get("rival") is not None) == 1:  # the matchings' seeds, the rival aside
+    if about["seeds"] - (rival is not None) == 1:  # the matchings' seeds, the rival aside
         return ("the feature matches, no alternative matching to weigh them against" if about["seed"] == 0 else
                 f"alternative matching {about['seed']}: the feature matches have too few consistent matches") + lost + close
     if about["seed"] == 0:

@@ -39,6 +39,7 @@ from ..geometry.mesh import Mesh
 from ..parallel import owns_threads
 from .alignment import align
 from .config import DenseConfig
+from .landmarks import distance_fields
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
 from .seeds import SeedVerdict, check_of_seeds, choose_seed, rival_start, seed_check
 from .signatures import point_signature, signature_coordinates, signature_turn_coordinates
@@ -314,18 +315,15 @@ def matching_of_map(correspondence, made: DenseMap, description_1, description_2
     images = made.target[np.asarray(description_1.feature_vertices, dtype=np.int64)]
     mapped = np.flatnonzero(images != UNMAPPED)
     targets = shape_2.mesh_index(np.asarray(description_2.feature_vertices, dtype=np.int64), nearest=True)
-    on_mesh = shape_2.mesh_index(images[mapped], nearest=True)
-    # (target features, mapped source features): distance from each target feature to each image
-    gaps = np.stack([shape_2.solver.distance(int(t))[on_mesh] for t in targets]) if len(mapped) else \
-        np.zeros((len(targets), 0))
-    keep = np.zeros(len(mapped), bool)
-    nearest_target = np.zeros(len(mapped), dtype=np.int64)
-    if gaps.size:
-        nearest_target = np.argmin(gaps, axis=0)  # per image, the target feature nearest it
-        nearest_image = np.argmin(gaps, axis=1)  # per target feature, the image nearest it
-        keep = (nearest_image[nearest_target] == np.arange(len(mapped))) \
-            & np.isfinite(gaps[nearest_target, np.arange(len(mapped))])
-    source, target = mapped[keep], nearest_target[keep]
+    source = target = np.zeros(0, dtype=np.int64)
+    if len(mapped) and len(targets):
+        # (mapped source features, target features): the geodesic distance from each image to each target feature
+        gaps = distance_fields(shape_2, {}, targets)[shape_2.mesh_index(images[mapped], nearest=True)]
+        nearest_target = np.argmin(gaps, axis=1)  # per image, the target feature nearest it
+        nearest_image = np.argmin(gaps, axis=0)  # per target feature, the image nearest it
+        rows = np.arange(len(mapped))
+        keep = (nearest_image[nearest_target] == rows) & np.isfinite(gaps[rows, nearest_target])
+        source, target = mapped[keep], nearest_target[keep]
     distance = descriptor_distances(description_1.descriptors, description_2.descriptors)[source, target]
     return Correspondence(np.asarray(description_1.feature_vertices)[source],
                           np.asarray(description_2.feature_vertices)[target], distance,
