@@ -13,6 +13,7 @@ per ``ncv``; the table prints the best of ``--repeat`` runs per mesh and the sum
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 
 import numpy as np
@@ -22,35 +23,43 @@ from speed import DATA  # benchmarks/speed.py: the data folder
 def main(argv: list | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("meshes", nargs="*", help="mesh files (default: six of faust-5k and tosca-5k)")
-    parser.add_argument("--k", type=int, default=130, help="eigenpairs (the dense basis: 120 + 10)")
+    parser.add_argument("--k", type=int, help="eigenpairs (default: the dense basis's, basis_size + basis_margin)")
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args(argv)
     import scipy.sparse as sp
     from scipy.sparse.linalg import eigsh
 
     from darcyan.config import DenseConfig
-    from darcyan.dense.zoomout import EIGSH_SHIFT
+    from darcyan.dense.zoomout import EIGSH_SHIFT, fit_width
+    from darcyan.errors import DarcyanError
     from darcyan.geometry.shape import prepare_shape
     from darcyan.geometry.spectral import START_SEED, laplacian_operators
     from darcyan.io.mesh_files import load_mesh
 
-    meshes = args.meshes or [str(DATA / f) for f in ("faust-5k/tr_reg_000.off", "faust-5k/tr_reg_001.off",
-                                                     "tosca-5k/cat0.off", "tosca-5k/david1.off",
-                                                     "tosca-5k/dog6.off", "tosca-5k/michael1.off")]
-    choices = {"2k+1 (ARPACK's default)": None, "1.5k": int(1.5 * args.k), "1.25k": int(1.25 * args.k)}
+    paths = args.meshes or [str(DATA / f) for f in ("faust-5k/tr_reg_000.off", "faust-5k/tr_reg_001.off",
+                                                    "tosca-5k/cat0.off", "tosca-5k/david1.off",
+                                                    "tosca-5k/dog6.off", "tosca-5k/michael1.off")]
+    try:  # every mesh read first: a missing or malformed file is one line, before any table
+        meshes = [prepare_shape(load_mesh(path)).mesh for path in paths]
+    except DarcyanError as exc:
+        print(f"eigsh_basis.py: error: {exc}", file=sys.stderr)
+        return 2
+    k = args.k or fit_width(DenseConfig().basis_size, DenseConfig())
+    choices = {"2k+1 (ARPACK's default)": None, "1.5k": int(1.5 * k), "1.25k": int(1.25 * k)}
     sums = dict.fromkeys(choices, 0.0)
     print("| mesh | vertices | " + " | ".join(choices) + " |")
     print("| --- | ---: |" + " ---: |" * len(choices))
-    for path in meshes:
-        mesh = prepare_shape(load_mesh(path)).mesh
+    for path, mesh in zip(paths, meshes):
         stiffness, mass = laplacian_operators(mesh)
+        mass = np.where(mass > 0, mass, mass[mass > 0].min(initial=1e-12))  # as laplace_beltrami_spectrum
+        mass_matrix = sp.diags(mass).tocsc()
         start = np.random.default_rng(START_SEED).uniform(-1.0, 1.0, mesh.n_vertices)
         row = []
         for name, ncv in choices.items():
             best = np.inf
             for _ in range(args.repeat):
                 t = time.perf_counter()
-                eigsh(stiffness, k=args.k, M=sp.diags(mass).tocsc(), sigma=EIGSH_SHIFT, which="LM",
+                eigsh(stiffness, k=min(k, mesh.n_vertices - 2), M=mass_matrix, sigma=EIGSH_SHIFT, which="LM",
                       tol=DenseConfig().basis_tolerance, v0=start, ncv=ncv)
                 best = min(best, time.perf_counter() - t)
             sums[name] += best
