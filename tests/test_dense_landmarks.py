@@ -1,10 +1,13 @@
 """Landmarks of a dense map (:mod:`darcyan.dense.landmarks`): the consistent set, the orientation
 coordinates, the landmark coordinates."""
 
+import functools
+
 import numpy as np
 import pytest
 from conftest import moved_and_mirrored_tip_fields, tip_correspondence
 
+from darcyan.config import DarcyanConfig
 from darcyan.dense.landmarks import MAX_EXHAUSTIVE_LANDMARKS, consistent_landmarks
 from darcyan.errors import DarcyanError
 from darcyan.geometry import synthetic
@@ -163,3 +166,54 @@ def test_landmark_coordinates_follow_the_vertices_of_a_moved_and_renumbered_copy
     assert np.allclose(coords_2[position], coords_1, atol=1e-6)
     with pytest.raises(DarcyanError, match="fewer than 3 consistent"):
         landmark_coordinates(shape_1, shape_2, tip_correspondence(tips[:2], position[tips[:2]]))
+
+
+def test_a_shapes_kept_distance_fields_are_the_solvers_and_cross_processes(figure_poses):
+    import pickle
+
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(figure_poses[0])
+    tip = int(synthetic.figure_tips()[0])
+    assert shape.known_distance_field(tip) is None
+    field = shape.distance_field(tip)
+    np.testing.assert_array_equal(field, shape.solver.distance(tip))
+    assert shape.known_distance_field(tip) is field  # kept, not computed again
+    copy = pickle.loads(pickle.dumps(shape))  # what a worker process sends back
+    np.testing.assert_array_equal(copy.known_distance_field(tip), field)
+
+
+def test_the_feature_points_fields_are_made_with_the_shape_and_read_by_the_map(small_pose_files, monkeypatch):
+    from darcyan.dense.landmarks import distance_fields
+    from darcyan.dense.maps import shape_operators
+    from darcyan.geometry.shape import prepare_shape
+    from darcyan.io.mesh_files import load_mesh
+    from darcyan.method.pipeline import describe_and_prepare
+
+    config = DarcyanConfig()
+    both = describe_and_prepare(small_pose_files, config, jobs=2,
+                                extra=functools.partial(shape_operators, config=config.dense))
+    for description, shape in both:
+        features = shape.mesh_index(description.feature_vertices)
+        assert len(features) >= 3 and (features >= 0).all()
+        for vertex in features:  # made in the worker (the second shape) or here, and brought back
+            np.testing.assert_array_equal(shape.known_distance_field(vertex), shape.solver.distance(int(vertex)))
+
+        def refuse(vertex):
+            raise AssertionError(f"vertex {vertex}: computed again, not read from the shape")
+
+        monkeypatch.setattr(shape.solver, "distance", refuse)
+        read = distance_fields(shape, {}, features)
+        monkeypatch.undo()
+        np.testing.assert_array_equal(read, np.stack([shape.solver.distance(int(v)) for v in features], axis=1))
+        other = int(np.setdiff1d(np.arange(shape.n_vertices), features)[0])
+        assert shape.known_distance_field(other) is None
+        distance_fields(shape, {}, [other])
+        assert shape.known_distance_field(other) is None  # a dense map's other fields are not kept on the shape
+    # On a shape prepared without its description (a large mesh's description reads coarse
+    # distances), shape_operators makes the feature points' fields itself.
+    description, _ = both[0]
+    fresh = prepare_shape(load_mesh(small_pose_files[0]), config)
+    shape_operators(fresh, description, config.dense)
+    for vertex in fresh.mesh_index(description.feature_vertices):
+        np.testing.assert_array_equal(fresh.known_distance_field(vertex), fresh.solver.distance(int(vertex)))

@@ -75,10 +75,13 @@ def consistent_landmarks(dist_1: np.ndarray, dist_2: np.ndarray, relative: float
 def distance_fields(shape, known: dict, vertices) -> np.ndarray:
     """``(n, len(vertices))`` the fast-marching distances from each of ``vertices`` (prepared
     numbering), read from ``known`` (``{vertex: (n,) distance}``) and kept there: a vertex's field
-    is computed once per pair, whichever seed or start asks for it."""
+    is computed once per pair, whichever seed or start asks for it; those the shape keeps (its
+    feature points', :func:`~darcyan.dense.maps.shape_operators`) are read from it."""
+    kept = getattr(shape, "known_distance_field", lambda vertex: None)
     for v in vertices:
         if int(v) not in known:
-            known[int(v)] = shape.solver.distance(int(v))
+            field = kept(int(v))
+            known[int(v)] = shape.solver.distance(int(v)) if field is None else field
     return np.stack([known[int(v)] for v in vertices], axis=1) if len(vertices) else np.zeros((shape.mesh.n_vertices, 0))
 
 

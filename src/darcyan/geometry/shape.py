@@ -27,7 +27,7 @@ from .repair import prepare_mesh
 from .spectral import SHIFT, Spectrum, laplace_beltrami_spectrum
 
 # What a pickled Shape keeps of what it built (beside derived arrays): what costs time to make.
-PORTABLE_MEMO = ("curvatures", "spectrum", "proxy", "proxy spectrum")
+PORTABLE_MEMO = ("curvatures", "spectrum", "proxy", "proxy spectrum", "distance")
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,6 +92,19 @@ class Shape:
     def gradient(self):
         """``(3m, n)`` the face gradient of vertex fields (:func:`~darcyan.geometry.operators.gradient_operator`)."""
         return gradient_operator(self.mesh)
+
+    def distance_field(self, vertex: int) -> np.ndarray:
+        """``(n,)`` the fast-marching geodesic distance (mesh units) from ``vertex`` (prepared
+        numbering) to every vertex, computed once per shape and vertex and kept: the feature
+        points' fields serve the description and the dense map's landmarks alike, and a shape
+        prepared in a worker process brings them back (:meth:`__getstate__`)."""
+        vertex = int(vertex)
+        return self._once(("distance", vertex), lambda: self.solver.distance(vertex))
+
+    def known_distance_field(self, vertex: int) -> np.ndarray | None:
+        """The field :meth:`distance_field` kept for ``vertex``, or ``None``: a reader that does
+        not keep the fields it computes itself (a dense map's other starts) looks here first."""
+        return self._memo.get(("distance", int(vertex)))
 
     def curvatures(self, smoothing: int = 0) -> Curvatures:
         """Meyer principal curvatures after ``smoothing`` one-ring averaging iterations."""
