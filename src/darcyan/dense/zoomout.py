@@ -221,10 +221,11 @@ def map_embeddings(b_a: np.ndarray, b_b: np.ndarray, c_ab: np.ndarray, c_ba: np.
         if total > 0:
             # Both terms compare b_a[i] with a row of b: w1 |a - x_j|^2 + w2 |a - y_j|^2 equals
             # (w1 + w2) |a - m_j|^2 + w1 w2 / (w1 + w2) |x_j - y_j|^2 with m_j their weighted mean.
-            x, y = b @ c_ba, b[:, :k] @ c_ab[:k].T
+            # y = b_k C_ab[:k]^T is the fold's first k columns (read before they are added to)
+            x, y = b @ c_ba, folded[:, :k]
             pulled = w1 * x + w2 * y  # (w1 + w2) m_j
-            folded[:, :k] += pulled
             offsets += (np.einsum("ij,ij->i", pulled, pulled) + w1 * w2 * np.einsum("ij,ij->i", x - y, x - y)) / total
+            folded[:, :k] += pulled
         parts = [folded]
         for extra in ((config.landmark_weight * f_b[rows]) if landmarks else None,
                       None if g_b is None else g_b[rows]):
