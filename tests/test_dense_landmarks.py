@@ -198,13 +198,12 @@ def test_the_feature_points_fields_are_made_with_the_shape_and_read_by_the_map(s
         assert len(features) >= 3 and (features >= 0).all()
         for vertex in features:  # made in the worker (the second shape) or here, and brought back
             np.testing.assert_array_equal(shape.known_distance_field(vertex), shape.solver.distance(int(vertex)))
+        with monkeypatch.context() as patch:
+            def refuse(vertex):
+                raise AssertionError(f"vertex {vertex}: computed again, not read from the shape")
 
-        def refuse(vertex):
-            raise AssertionError(f"vertex {vertex}: computed again, not read from the shape")
-
-        monkeypatch.setattr(shape.solver, "distance", refuse)
-        read = distance_fields(shape, {}, features)
-        monkeypatch.undo()
+            patch.setattr(shape.solver, "distance", refuse)
+            read = distance_fields(shape, {}, features)
         np.testing.assert_array_equal(read, np.stack([shape.solver.distance(int(v)) for v in features], axis=1))
         other = int(np.setdiff1d(np.arange(shape.n_vertices), features)[0])
         assert shape.known_distance_field(other) is None
@@ -214,6 +213,18 @@ def test_the_feature_points_fields_are_made_with_the_shape_and_read_by_the_map(s
     # distances), shape_operators makes the feature points' fields itself.
     description, _ = both[0]
     fresh = prepare_shape(load_mesh(small_pose_files[0]), config)
-    shape_operators(fresh, description, config.dense)
+    shape_operators(fresh, description.feature_vertices, config=config.dense)
     for vertex in fresh.mesh_index(description.feature_vertices):
         np.testing.assert_array_equal(fresh.known_distance_field(vertex), fresh.solver.distance(int(vertex)))
+
+
+def test_a_small_meshs_description_keeps_its_feature_points_exact_fields_and_no_others(figure_poses):
+    from darcyan.geometry.shape import prepare_shape
+    from darcyan.method.pipeline import analyze_shape
+
+    shape = prepare_shape(figure_poses[0])
+    analysis = analyze_shape(shape)
+    kept = [v for v in range(shape.n_vertices) if shape.known_distance_field(v) is not None]
+    assert sorted(kept) == sorted(int(v) for v in analysis.features.vertices)
+    for vertex in kept:
+        np.testing.assert_array_equal(shape.known_distance_field(vertex), shape.solver.distance(vertex))

@@ -245,21 +245,21 @@ def _zoomout_map(shape_1, shape_2, seed, config: DenseConfig, samples: tuple, ba
     return consensus_map(mesh_2.vertices, maps)
 
 
-def shape_operators(shape, description=None, config: DenseConfig = DenseConfig()) -> None:
+def shape_operators(shape, feature_vertices=None, *, config: DenseConfig = DenseConfig()) -> None:
     """Build on ``shape`` (a prepared :class:`~darcyan.geometry.shape.Shape`) what a dense map
     with ``config`` needs of it alone, and keep it there: its basis and eigenvalues
     (:func:`~darcyan.dense.zoomout.dense_spectrum`), its point signature and, given its
-    ``description`` (:class:`~darcyan.method.pipeline.ShapeDescription`), the distance fields of
-    its feature points (:meth:`~darcyan.geometry.shape.Shape.distance_field`), from which the
-    map's landmarks are drawn. A shape made ready in a worker process carries them back
+    ``feature_vertices`` ``(k,)`` (input numbering: a description's), their distance fields
+    (:meth:`~darcyan.geometry.shape.Shape.distance_field`), from which the map's landmarks are
+    drawn. A shape made ready in a worker process carries them back
     (:func:`darcyan.method.pipeline.describe_and_prepare`), so that two shapes' eigenproblems and
     fast marchings run at once."""
     if config.method == "zoomout" or config.candidates > 1:
         dense_spectrum(shape, config)
     if config.signature_weight > 0 or config.signature_turns > 0 or config.candidates > 1:
         point_signature(shape, config)
-    if description is not None and config.method == "zoomout":
-        for vertex in shape.mesh_index(description.feature_vertices):
+    if feature_vertices is not None and config.method == "zoomout":
+        for vertex in shape.mesh_index(feature_vertices):
             if vertex >= 0:  # a feature point the preparation left out has no field here
                 shape.distance_field(vertex)
 

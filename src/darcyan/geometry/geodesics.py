@@ -200,16 +200,11 @@ class LocalGeodesicSolver:
         margin: the balls are cut where the estimate exceeds ``radius`` by this share of it (the
             coarse proxy's fast marching overestimates distances by up to ~12% of 0.25 on
             TOSCA); if the cut still comes within the radius, the margin doubles.
-        exact: ``vertex -> (n,)`` the whole mesh's distance field where there is no
-            ``estimate`` (default ``solver.distance``; a shape's kept fields,
-            :meth:`~darcyan.geometry.shape.Shape.distance_field`, share them with later stages).
     """
 
     def __init__(self, solver: GeodesicSolver, radius: float,
-                 estimate: Callable[[int], np.ndarray] | None = None, margin: float = GeodesicMargins().ball,
-                 exact: Callable[[int], np.ndarray] | None = None):
+                 estimate: Callable[[int], np.ndarray] | None = None, margin: float = GeodesicMargins().ball):
         self.solver = solver
-        self._exact = solver.distance if exact is None else exact
         self.margin = float(margin)
         self.mesh = solver.mesh
         self.radius = float(radius)
@@ -231,7 +226,7 @@ class LocalGeodesicSolver:
         vertex = int(vertex)
         if vertex not in self._fields:
             if self.estimate is None:
-                self._fields[vertex] = self._exact(vertex)
+                self._fields[vertex] = self.solver.distance(vertex)
             else:
                 ball = self.ball(vertex)
                 near = ball.distance if ball.distance is not None else ball.solver.distance(ball.centre)

@@ -101,6 +101,12 @@ class Shape:
         vertex = int(vertex)
         return self._once(("distance", vertex), lambda: self.solver.distance(vertex))
 
+    def keep_distance_field(self, vertex: int, field: np.ndarray) -> None:
+        """Keep ``field`` ``(n,)`` as :meth:`distance_field` of ``vertex``: one computed elsewhere
+        by the same solver (the description's exact fields of its feature points), so that it is
+        not computed again. A field already kept stays."""
+        self._memo.setdefault(("distance", int(vertex)), np.asarray(field))
+
     def known_distance_field(self, vertex: int) -> np.ndarray | None:
         """The field :meth:`distance_field` kept for ``vertex``, or ``None``: a reader that does
         not keep the fields it computes itself (a dense map's other starts) looks here first."""

@@ -229,7 +229,7 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
     # An extremity's top beyond this radius (up to tip_radius) is read on that estimate too:
     # exact geodesics that far made every ball and grid about 40% dearer on the 52k humans.
     local = LocalGeodesicSolver(solver, max(config.extremity_radius, grid_reach(config)),
-                                None if proxy is None else proxy.distance, config.margins.ball, shape.distance_field)
+                                None if proxy is None else proxy.distance, config.margins.ball)
     distances: dict = {}
     near_rim, rims = cut_rim_zone(normalized, solver, config)
     features = extremities(normalized, local, agd, config, distances, near_rim)
@@ -248,6 +248,9 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
     centre_vertex = int(np.argmin(agd.values))
     centre = solver.distance(centre_vertex) if proxy is None else proxy.distance(centre_vertex)
     grids = darcyan_grids(normalized, local, features.vertices, config, distances, toward=centre, normals=shape.normals)
+    if proxy is None:  # the feature points' exact fields (the grids made those of moved tips): kept for later stages
+        for vertex in features.vertices:
+            shape.keep_distance_field(vertex, distances[int(vertex)])
     descriptors = curvature_descriptors(normalized, grids, curvatures)
     if not np.isfinite(descriptors).any(axis=1).any():
         raise MeshError(shape.name, f"mesh too small to carry a Darcyan grid of radius {config.radius} "
@@ -345,9 +348,9 @@ def describe_and_prepare(sources: list, config: DarcyanConfig = DarcyanConfig(),
                          cache: ShapeCache | None = None, jobs: int = 1, extra=None) -> list:
     """``[(description, shape)]``: for each file of ``sources`` its :func:`describe_shape`
     description (from ``cache`` when there) and its prepared :class:`~darcyan.geometry.shape.Shape`
-    (as :func:`load_shape` makes it), on which ``extra(shape, description)``, when given, has
-    been called: what it builds on the shape (e.g. a dense map's basis, its feature points'
-    distance fields) is kept with it. With ``jobs > 1``
+    (as :func:`load_shape` makes it), on which ``extra(shape, feature_vertices)`` (the
+    description's, input numbering), when given, has been called: what it builds on the shape
+    (e.g. a dense map's basis, its feature points' distance fields) is kept with it. With ``jobs > 1``
     the files are prepared, described and extended at once in up to ``jobs`` worker processes,
     and each shape comes back with what was built on it
     (:meth:`~darcyan.geometry.shape.Shape.__getstate__`). ``extra`` must be picklable then (a
@@ -362,10 +365,12 @@ def _describe_files(paths: list, keys: list, results: list, config: DarcyanConfi
                     jobs: int, keep_shapes: bool = False, extra=None) -> list:
     """``[(description, shape or None)]`` of :func:`describe_shapes` and :func:`describe_and_prepare`:
     the files whose description ``results`` lacks (``None``) described, and, with ``keep_shapes``,
-    every file prepared (``extra(shape, description)`` called on it) and its shape returned; the work spread
+    every file prepared (``extra(shape, feature_vertices)`` called on it) and its shape returned; the work spread
     over processes by :func:`_across_processes`, the new descriptions saved under ``keys``."""
     run = [i for i, described in enumerate(results) if keep_shapes or described is None]
-    tasks = [(paths[i], config, repair, results[i], keep_shapes, extra) for i in run]
+    # A known description travels as its feature points alone: all that extra reads of it.
+    tasks = [(paths[i], config, repair, None if results[i] is None else results[i].feature_vertices, keep_shapes,
+              extra) for i in run]
     shapes = [None] * len(paths)
     for i, (arrays, said, shape) in zip(run, _across_processes(_prepared, tasks, jobs)):
         shapes[i] = shape
@@ -403,20 +408,23 @@ def _beside_workers(function, tasks: list) -> list:
 
 def _prepared(task: tuple) -> tuple:
     """``(arrays, warnings, shape)`` of :func:`_describe_files` for one file (``arrays``: ``None``
-    when its description was already known, from the cache; ``shape``: ``None`` unless kept, so
-    that a worker sends back only the description); in a worker process or not."""
-    path, config, repair, known, keep_shape, extra = task
+    when its description was already known, from the cache, and the task carries its feature
+    points; ``shape``: ``None`` unless kept, so that a worker sends back only the description);
+    in a worker process or not."""
+    path, config, repair, known_features, keep_shape, extra = task
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", MeshWarning)
         shape = prepare_shape(load_mesh(path), config, repair)
-        description = known if known is not None else analyze_shape(shape, config).description
-        arrays = description.arrays() if known is None else None
+        arrays = None
+        if known_features is None:
+            description = analyze_shape(shape, config).description
+            arrays, known_features = description.arrays(), description.feature_vertices
     said = [str(w.message) for w in caught if issubclass(w.category, MeshWarning)]
     for w in caught:  # the others (a library's own) are said here, in whichever process
         if not issubclass(w.category, MeshWarning):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     if extra is not None:
-        extra(shape, description)
+        extra(shape, known_features)
     return arrays, said, shape if keep_shape else None
 
 
