@@ -388,7 +388,9 @@ class DenseConfig:
             this share of the chosen one's).
         trust_orientation: a map is ``trusted`` (``DenseMap.check``) only when its orientation
             agreement is at least this (a map flipped against its landmarks scores -0.5 to -0.7,
-            a right one 0.6 to 0.9), among other conditions (:func:`~darcyan.dense.maps.trusted`).
+            a right one 0.6 to 0.9: 95% of the right maps of the benchmark sets at least 0.58),
+            among other conditions (:func:`~darcyan.dense.maps.trusted`); a map from the matches
+            that is not trusted meets the start without landmarks (``start_in_doubt``).
         trust_residual: a map is ``trusted`` only when the alignment's deformation stayed within
             this mean distance (sqrt(area)) of the images it was pulled to
             (``MapCheck.residual``): right maps of every benchmark set stayed within 0.0116, and
@@ -484,7 +486,7 @@ class DenseConfig:
     signature_until: int = 70
     signature_turns: float = 2.0
     seed_margin: float = 0.04
-    trust_orientation: float = 0.3
+    trust_orientation: float = 0.55
     trust_residual: float = 0.012
     local_search_above: int = 20000
     local_search_reach: int = 16
