@@ -283,3 +283,42 @@ def test_the_trust_rule_condition_by_condition():
     assert not trusted(check(seed=2), sure, config) and trusted(check(seed=2), doubt, config)
     assert not trusted(check(clear=False), doubt, config) and trusted(check(clear=False), sure, config)
     assert not trusted(check(residual=0.02), sure, config) and trusted(check(residual=float("nan")), sure, config)
+
+
+def test_a_map_not_trusted_says_which_conditions_it_fails(capsys):
+    """distrust_reasons names each failed condition of the trust rule, once, and is empty exactly
+    when the map is trusted; the command prints them."""
+    import dataclasses as dc
+
+    from conftest import tip_correspondence
+
+    from darcyan.cli import _say_dense
+    from darcyan.dense.maps import DenseMap, MapCheck, distrust_reasons, trusted
+    from darcyan.dense.seeds import seed_check
+
+    def check(orientation=0.8, start="matches", seed=0, clear=True, residual=0.006):
+        scores = {0: 1.0, 2: 1.0} if seed else {0: 1.0}
+        verdict = dc.replace(seed_check(seed, scores, 0.04, start), clear=clear)
+        return MapCheck(orientation, 0.01, verdict, residual=residual)
+
+    sure = tip_correspondence([1, 2, 3], [1, 2, 3])
+    doubt = dc.replace(sure, in_doubt=True)
+    config = DenseConfig()
+    cases = [(check(), sure, None), (check(orientation=0.1), sure, "orientation agrees with its landmarks by 0.10"),
+             (check(start="spectral", clear=True), doubt, "started without the feature matches"),
+             (check(seed=2), sure, "set aside feature matches the sparse stage was sure of"),
+             (check(clear=False), doubt, "did not stand clear"), (check(residual=0.02), sure, "alignment stayed 0.0200"),
+             (check(residual=float("nan")), sure, None)]
+    for made, matches, expected in cases:
+        reasons = distrust_reasons(made, matches, config)
+        assert trusted(made, matches, config) == (not reasons)
+        assert reasons == (() if expected is None else tuple(r for r in reasons if expected in r))
+        assert expected is None or len(reasons) == 1
+    both = distrust_reasons(check(orientation=0.1, residual=0.02), sure, config)
+    assert len(both) == 2 and "orientation" in both[0] and "alignment" in both[1]
+
+    made = dc.replace(check(orientation=0.1), trusted=False, doubts=both)
+    _say_dense(lambda message: None, "b.off", "a.off", DenseMap(np.zeros(3, np.int64), np.zeros((0, 2), np.int64),
+                                                              check=made), None, None)
+    err = capsys.readouterr().err
+    assert "dense map not trusted (its orientation agrees with its landmarks by 0.10" in err and "; the alignment" in err

@@ -205,10 +205,8 @@ def _say_dense(say, target: str, source: str, dense, shapes, truth, quiet: bool 
         if not quiet:  # --quiet: warnings only
             print(f"darcyan: {target}: dense map trusted", file=sys.stderr)
     else:
-        print(f"darcyan: warning: {target}: dense map not trusted (its orientation disagrees with its "
-              f"landmarks, it started without the feature matches, it set aside matches the sparse stage was "
-              f"sure of, its seed did not stand clear of the others, or the alignment could not follow it): "
-              f"look at it (--plot)", file=sys.stderr)
+        why = "; ".join(check.doubts) or "see DenseMap.check"
+        print(f"darcyan: warning: {target}: dense map not trusted ({why}): look at it (--plot)", file=sys.stderr)
     scored = None
     if truth is not None:
         from .eval.dense_scores import evaluate_dense

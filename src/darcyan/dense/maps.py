@@ -68,6 +68,8 @@ class MapCheck:
         residual: how far the alignment's as-rigid-as-possible deformation of the source stayed
             from the images it was pulled towards (sqrt(area) units; NaN without alignment;
             :class:`~darcyan.dense.alignment.Alignment`).
+        doubts: why it is not trusted, one phrase per condition it fails
+            (:func:`distrust_reasons`; empty when trusted).
     """
 
     orientation: float
@@ -75,6 +77,7 @@ class MapCheck:
     verdict: SeedVerdict
     trusted: bool = False
     residual: float = float("nan")
+    doubts: tuple = ()
 
     @property
     def seed(self) -> int:
@@ -88,10 +91,10 @@ class MapCheck:
 
     def as_dict(self) -> dict:
         """Flat, as JSON records keep it: ``orientation``, ``distortion``, the verdict's fields,
-        ``trusted`` and ``residual`` (``None`` for NaN)."""
+        ``trusted``, ``residual`` (``None`` for NaN) and ``doubts`` (a list)."""
         residual = None if np.isnan(self.residual) else self.residual  # JSON has no NaN
         return {"orientation": self.orientation, "distortion": self.distortion, **self.verdict.as_dict(),
-                "trusted": self.trusted, "residual": residual}
+                "trusted": self.trusted, "residual": residual, "doubts": list(self.doubts)}
 
 
 @dataclass
@@ -212,7 +215,8 @@ def _checked(shape_1, local: np.ndarray, seed, verdict: SeedVerdict, residual: f
     """The :class:`MapCheck` of the map ``local (n1,)`` from ``seed``, its trust decided."""
     orientation, distortion = map_check(shape_1, local, seed.fields_1, seed.fields_2, seed.turns_1, seed.turns_2)
     check = MapCheck(orientation, distortion, verdict, residual=residual)
-    return dataclasses.replace(check, trusted=trusted(check, correspondence, config))
+    doubts = distrust_reasons(check, correspondence, config)
+    return dataclasses.replace(check, trusted=not doubts, doubts=doubts)
 
 
 def _zoomout_map(shape_1, shape_2, seed, config: DenseConfig, samples: tuple, bases: tuple) -> np.ndarray:
@@ -279,12 +283,30 @@ def trusted(check: MapCheck, correspondence, config: DenseConfig) -> bool:
       ``config.trust_residual`` (a map that needs the source mirrored or torn cannot be followed
       as rigidly as possible; without alignment, NaN, this condition holds).
 
-    Measured on the shared sets and the hard copies: ``docs/decisions/every-pair.md``."""
+    Measured on the shared sets and the hard copies: ``docs/decisions/every-pair.md``. Which
+    conditions a map fails: :func:`distrust_reasons`."""
+    return not distrust_reasons(check, correspondence, config)
+
+
+def distrust_reasons(check: MapCheck, correspondence, config: DenseConfig) -> tuple:
+    """The conditions of :func:`trusted` that a map's ``check`` fails, each as a phrase a person
+    can act on (empty: trusted), in the order :func:`trusted` lists them."""
     in_doubt = getattr(correspondence, "in_doubt", True)
     from_matches = check.start == "matches"
-    overrode = from_matches and check.seed != 0 and not in_doubt
-    return bool(check.orientation >= config.trust_orientation and from_matches and not overrode
-                and (check.verdict.clear or not in_doubt) and not check.residual > config.trust_residual)
+    reasons = []
+    if not check.orientation >= config.trust_orientation:
+        reasons.append(f"its orientation agrees with its landmarks by {check.orientation:.2f}, below "
+                       f"{config.trust_orientation:g}")
+    if not from_matches:
+        reasons.append("it started without the feature matches")
+    elif check.seed != 0 and not in_doubt:
+        reasons.append("it set aside feature matches the sparse stage was sure of")
+    if in_doubt and not check.verdict.clear:
+        reasons.append("the feature matches were in doubt and its seed did not stand clear of the others")
+    if check.residual > config.trust_residual:  # NaN (no alignment): not a reason
+        reasons.append(f"the alignment stayed {check.residual:.4f} sqrt(area) from its images, more than "
+                       f"{config.trust_residual:g}")
+    return tuple(reasons)
 
 
 def input_map(shape_1, shape_2, local: np.ndarray) -> np.ndarray:
