@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..api import verification_wanted
+from ..api import matches_of_map, verification_wanted
 from ..config import DarcyanConfig
 from ..dense import pyfm
 from ..errors import DarcyanError
@@ -345,7 +345,7 @@ def _seed_score(job: dict, target: Shape, matching) -> dict:
 
 def _dense_records(job: dict, target: Shape) -> list:
     """The dense maps of one pair (``job["dense_methods"]``), scored on the same sampled vertices."""
-    from ..dense.maps import DENSE_FAILURES, UNMAPPED, dense_map, matching_of_map, pyfm_own_map
+    from ..dense.maps import DENSE_FAILURES, UNMAPPED, dense_map, pyfm_own_map
     from ..eval.dense_scores import evaluate_dense_maps
     from ..eval.metrics import GroundTruth
     from ..method.pipeline import match_shapes
@@ -379,11 +379,9 @@ def _dense_records(job: dict, target: Shape) -> list:
                 info["landmarks"] = len(result.landmarks)
                 info["check"] = result.check.as_dict()
                 # how right the seed was (scored after the timing: it reads the ground truth)
-                if result.check.start == "matches":
-                    matching = ([correspondence] + list(correspondence.alternatives))[result.check.seed]
-                else:  # started without the matches: those it reads
-                    matching = matching_of_map(correspondence, result, job["source_rec"]["description"],
-                                               job["target_rec"]["description"], target)
+                # the matches the map agrees with, as darcyan.correspond gives them
+                matching = matches_of_map(correspondence, result, job["source_rec"]["description"],
+                                          job["target_rec"]["description"], target)
                 info.update(_seed_score(job, target, matching))
         except DENSE_FAILURES as exc:
             seconds = time.perf_counter() - start
