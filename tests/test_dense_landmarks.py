@@ -228,3 +228,17 @@ def test_a_small_meshs_description_keeps_its_feature_points_exact_fields_and_no_
     assert sorted(kept) == sorted(int(v) for v in analysis.features.vertices)
     for vertex in kept:
         np.testing.assert_array_equal(shape.known_distance_field(vertex), shape.solver.distance(vertex))
+
+
+def test_keeping_a_distance_field_refuses_a_wrong_vertex_or_length(figure_poses):
+    from darcyan.errors import MeshError
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(figure_poses[0])
+    with pytest.raises(MeshError, match="out of range"):
+        shape.keep_distance_field(shape.n_vertices, np.zeros(shape.n_vertices))
+    with pytest.raises(MeshError, match="expected"):
+        shape.keep_distance_field(0, np.zeros(shape.n_vertices - 1))
+    with pytest.raises(MeshError, match="out of range"):
+        shape.distance_field(-1)
+    assert shape.known_distance_field(0) is None

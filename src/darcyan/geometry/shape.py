@@ -104,8 +104,15 @@ class Shape:
     def keep_distance_field(self, vertex: int, field: np.ndarray) -> None:
         """Keep ``field`` ``(n,)`` as :meth:`distance_field` of ``vertex``: one computed elsewhere
         by the same solver (the description's exact fields of its feature points), so that it is
-        not computed again. A field already kept stays."""
-        self._memo.setdefault(("distance", int(vertex)), np.asarray(field))
+        not computed again. A field already kept stays. A vertex out of range or a field of
+        another length is a :class:`~darcyan.errors.MeshError`."""
+        vertex, field = int(vertex), np.asarray(field, dtype=np.float64)
+        if not 0 <= vertex < self.n_vertices:
+            raise MeshError(self.name, f"distance field of vertex {vertex}: out of range 0..{self.n_vertices - 1}")
+        if field.shape != (self.n_vertices,):
+            raise MeshError(self.name, f"distance field of vertex {vertex}: shape {field.shape}, expected "
+                                       f"({self.n_vertices},)")
+        self._memo.setdefault(("distance", vertex), field)
 
     def known_distance_field(self, vertex: int) -> np.ndarray | None:
         """The field :meth:`distance_field` kept for ``vertex``, or ``None``: a reader that does
