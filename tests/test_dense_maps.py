@@ -260,8 +260,9 @@ def test_cli_farthest_sampling_maps_a_renumbered_file_alike(small_pose_files, tm
 
 
 def test_the_trust_rule_condition_by_condition():
-    """trusted: orientation kept, started from the matches, no sure matching set aside, and a
-    matching in doubt whose seed stood clear (each condition alone makes a map untrusted)."""
+    """trusted: orientation kept, started from the matches, no sure matching set aside, a
+    matching in doubt whose seed stood clear, the alignment close to the map and no landmark pair
+    left out (each condition alone makes a map untrusted)."""
     import dataclasses as dc
 
     from conftest import tip_correspondence
@@ -269,9 +270,9 @@ def test_the_trust_rule_condition_by_condition():
     from darcyan.dense.maps import MapCheck, trusted
     from darcyan.dense.seeds import seed_check
 
-    def check(orientation=0.8, start="matches", seed=0, clear=True, residual=0.006):
+    def check(orientation=0.8, start="matches", seed=0, clear=True, residual=0.006, left_out=None):
         scores = {0: 1.0, 2: 1.0} if seed else {0: 1.0}
-        verdict = dc.replace(seed_check(seed, scores, 0.04, start), clear=clear)
+        verdict = dc.replace(seed_check(seed, scores, 0.04, start), clear=clear, left_out=left_out)
         return MapCheck(orientation, 0.01, verdict, residual=residual)
 
     sure = tip_correspondence([1, 2, 3], [1, 2, 3])  # in_doubt False
@@ -283,6 +284,7 @@ def test_the_trust_rule_condition_by_condition():
     assert not trusted(check(seed=2), sure, config) and trusted(check(seed=2), doubt, config)
     assert not trusted(check(clear=False), doubt, config) and trusted(check(clear=False), sure, config)
     assert not trusted(check(residual=0.02), sure, config) and trusted(check(residual=float("nan")), sure, config)
+    assert not trusted(check(left_out=(4, 7, 0.5)), sure, config)
 
 
 def test_a_map_not_trusted_says_which_conditions_it_fails(capsys):
@@ -296,9 +298,9 @@ def test_a_map_not_trusted_says_which_conditions_it_fails(capsys):
     from darcyan.dense.maps import DenseMap, MapCheck, distrust_reasons, trusted
     from darcyan.dense.seeds import seed_check
 
-    def check(orientation=0.8, start="matches", seed=0, clear=True, residual=0.006):
+    def check(orientation=0.8, start="matches", seed=0, clear=True, residual=0.006, left_out=None):
         scores = {0: 1.0, 2: 1.0} if seed else {0: 1.0}
-        verdict = dc.replace(seed_check(seed, scores, 0.04, start), clear=clear)
+        verdict = dc.replace(seed_check(seed, scores, 0.04, start), clear=clear, left_out=left_out)
         return MapCheck(orientation, 0.01, verdict, residual=residual)
 
     sure = tip_correspondence([1, 2, 3], [1, 2, 3])
@@ -308,7 +310,8 @@ def test_a_map_not_trusted_says_which_conditions_it_fails(capsys):
              (check(start="spectral", clear=True), doubt, "started without the feature matches"),
              (check(seed=2), sure, "set aside feature matches the sparse stage was sure of"),
              (check(clear=False), doubt, "did not stand clear"), (check(residual=0.02), sure, "alignment stayed 0.0200"),
-             (check(residual=float("nan")), sure, None)]
+             (check(residual=float("nan")), sure, None),
+             (check(left_out=(4, 7, 0.5)), sure, "a landmark pair the others contradicted was left out")]
     for made, matches, expected in cases:
         reasons = distrust_reasons(made, matches, config)
         assert trusted(made, matches, config) == (not reasons)

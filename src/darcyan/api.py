@@ -246,7 +246,8 @@ def matches_of_map(matches: Correspondence, made: DenseMap, description_1=None, 
     """The feature matches a dense map agrees with: ``matches`` itself, or the alternative
     matching that seeded the map instead (its own dense map contradicted the sparse one), the
     others kept as its alternatives. A map started without the matches (too few consistent
-    ones, or a rival start that won) gives the matches it reads itself
+    ones, or a rival start that won), or made without a landmark pair the others contradicted
+    (``check.verdict.left_out``), gives the matches it reads itself
     (:func:`~darcyan.dense.maps.matching_of_map`: the shapes' descriptions and the prepared
     target needed; without them ``matches`` stay as they are)."""
     from .dense.maps import matching_of_map
@@ -254,7 +255,7 @@ def matches_of_map(matches: Correspondence, made: DenseMap, description_1=None, 
 
     if made.check is None:
         return matches
-    if made.check.start != "matches":
+    if made.check.start != "matches" or made.check.verdict.left_out is not None:
         if description_1 is None or description_2 is None or shape_2 is None:
             return matches
         return matching_of_map(matches, made, description_1, description_2, shape_2)

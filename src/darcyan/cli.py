@@ -285,6 +285,11 @@ def _seed_verdict(about: dict) -> str:
                            "less closely: not taken"), ""
         else:
             lost = "; a start without the feature matches was weighed against it and did not score better"
+    left_out = about.get("left_out")
+    if left_out is not None:  # before the rival's verdict: it was weighed against the map without the pair
+        source, target, displacement = left_out
+        lost = (f"; the landmark pair {source} -> {target} left out (the other pairs sent its source "
+                f"{displacement:.2f} sqrt(area) away), the feature matches read from the map") + lost
     if about["seeds"] - (rival is not None) == 1:  # the matchings' seeds, the rival aside
         return ("the feature matches, no alternative matching to weigh them against" if about["seed"] == 0 else
                 f"alternative matching {about['seed']}: the feature matches have too few consistent matches") + lost + close

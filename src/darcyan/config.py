@@ -450,6 +450,15 @@ class DenseConfig:
             ``MapCheck.residual``). A wrong sparse matching (or an alternative that beat a right
             one by a hair) ruins a whole map, and the start without landmarks does not depend on
             it. Costs a clear pair nothing (``docs/decisions/every-pair.md``).
+        landmark_contradiction: before that, a map from the matches that is not trusted has
+            its landmark pairs checked against each other: each pair's source is sent by the
+            short ZoomOut map seeded by the others alone, and when the farthest such image lies
+            more than this (geodesic, sqrt(area) units) from its pair's target, a map is made
+            without that pair, and taken when its alignment follows it at least as closely and
+            its orientation agrees at least as well (``SeedVerdict.left_out``; 0: never). A
+            wrong pair whose distances to the others are right by symmetry (a front paw sent to
+            the other) survives the consistency test and ruins its region; right pairs stay
+            within 0.25 of their targets on the shared sets (``docs/decisions/every-pair.md``).
         alignment_slack: a vertex keeps ZoomOut's image where the aligned image's geodesic
             distances to the landmarks differ from the vertex's own by more than this (sqrt(area)
             units) beyond those of ZoomOut's image: two fingers side by side are near in space,
@@ -503,6 +512,7 @@ class DenseConfig:
     start_landmarks: int = 6
     start_checked: int = 4
     start_in_doubt: bool = True
+    landmark_contradiction: float = 0.3
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -545,7 +555,7 @@ class DenseConfig:
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
                      "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns",
                      "commutativity", "alignment_normal_weight", "alignment_slack", "landmark_tie_weight",
-                     "trust_residual"):
+                     "trust_residual", "landmark_contradiction"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0
                     and math.isfinite(value)):

@@ -6,9 +6,10 @@
    one whose short ZoomOut best keeps the curvature signature (:mod:`darcyan.dense.signatures`),
    or, when none gives three consistent landmarks, the landmarks of a short map started from
    the spectra or the axes of inertia (:mod:`darcyan.dense.start`); when the map from the
-   matches is not trusted, that start competes with its seed, scored alike, and its map is taken
-   when it scores clearly better and the alignment follows it more closely
-   (``DenseConfig.start_in_doubt``);
+   matches is not trusted, a landmark pair the others contradict is left out
+   (``DenseConfig.landmark_contradiction``), then that start competes with its seed, scored
+   alike, and its map is taken when it scores clearly better and the alignment follows it more
+   closely (``DenseConfig.start_in_doubt``);
 2. its landmarks (:mod:`darcyan.dense.landmarks`): the consistent matches, and each vertex's
    distances to them and their turns, whose nearest neighbours on the other shape give the
    first maps in both directions;
@@ -41,7 +42,7 @@ from .alignment import align
 from .config import DenseConfig
 from .landmarks import distance_fields
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
-from .seeds import SeedVerdict, check_of_seeds, choose_seed, rival_start, seed_check
+from .seeds import SeedVerdict, check_of_seeds, choose_seed, contradicted_landmark, rival_start, seed_check, without_landmark
 from .signatures import point_signature, signature_coordinates, signature_turn_coordinates
 from .zoomout import consensus_map, dense_eigenvalues, dense_spectrum, read_out_map, zoomout, zoomout_samples
 
@@ -152,11 +153,36 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     check = _checked(shape_1, local, seed, check_of_seeds(seed, choice.seeds, config.seed_margin), residual,
                      correspondence, config)
     pairs = (seed.source, seed.target)
-    if not check.trusted and check.start == "matches" and config.start_in_doubt and config.method == "zoomout":
+    in_doubt = not check.trusted and check.start == "matches" and config.start_in_doubt and config.method == "zoomout"
+    scored = len(choice.seeds) > 1 or seed.signature > 0  # a lone seed is not scored (0)
+    if in_doubt and config.landmark_contradiction > 0:
+        # A wrong landmark pair the consistency test kept (right distances by symmetry) ruins its
+        # region: the others, alone, send its source elsewhere.
+        t = time.perf_counter()
+        found = contradicted_landmark(shape_1, shape_2, seed, config, choice.samples, choice.bases)
+        timings["landmark check"] = time.perf_counter() - t
+        if found is not None and found[1] > config.landmark_contradiction:
+            say("a landmark pair the others contradict left out")
+            i, displacement = found
+            reduced = without_landmark(seed, i, config)
+            reduced_local, reduced_residual = _map_of_seed(shape_1, shape_2, reduced, config, choice, say, timings,
+                                                           "reduced ")
+            left_out = (int(shape_1.mesh.input_index[seed.source[i]]), int(shape_2.mesh.input_index[seed.target[i]]),
+                        round(displacement, 4))
+            reduced_check = _checked(shape_1, reduced_local, reduced,
+                                     dataclasses.replace(check.verdict, left_out=left_out), reduced_residual,
+                                     correspondence, config)
+            # Two judges beside the contradiction: the alignment follows it at least as closely
+            # (NaN without alignment: not a judge) and its orientation agrees at least as well.
+            if not reduced_residual > residual and reduced_check.orientation >= check.orientation:
+                local, residual, check, seed = reduced_local, reduced_residual, reduced_check, reduced
+                pairs = (seed.source, seed.target)
+                choice = dataclasses.replace(choice, seed=seed)
+                scored = False  # its signature is not yet scored: the rival start scores it
+    if in_doubt:
         # The map from the matches is in doubt: the start without landmarks competes with its seed.
         say("spectral start (the map from the matches is not trusted)")
         scores = {s.rank: s.signature for s in choice.seeds}
-        scored = len(choice.seeds) > 1 or seed.signature > 0  # a lone seed is not scored (0)
         choice = dataclasses.replace(choice, seeds=[seed])  # the losers' per-vertex arrays let go
         t = time.perf_counter()
         rival = rival_start(shape_1, shape_2, correspondence, config, choice, scored)
@@ -181,7 +207,8 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             else:  # the same map: only the verdict gains the rival (a map not trusted stays so)
                 verdict = seed_check(check.seed, scores, config.seed_margin, check.start, check.verdict.start_from,
                                      rival_seed.rank)
-                check = dataclasses.replace(check, verdict=verdict)
+                check = dataclasses.replace(check, verdict=dataclasses.replace(verdict,
+                                                                               left_out=check.verdict.left_out))
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([shape_1.mesh.input_index[pairs[0]], shape_2.mesh.input_index[pairs[1]]], axis=1)
     return DenseMap(target, landmarks, timings, check)
@@ -281,7 +308,9 @@ def trusted(check: MapCheck, correspondence, config: DenseConfig) -> bool:
       (``check.verdict.clear``): then the dense stage's judgment is the only one, and it must be plain;
     - the alignment's deformation could follow it: its residual (``check.residual``) is at most
       ``config.trust_residual`` (a map that needs the source mirrored or torn cannot be followed
-      as rigidly as possible; without alignment, NaN, this condition holds).
+      as rigidly as possible; without alignment, NaN, this condition holds);
+    - no landmark pair was left out (``check.verdict.left_out``): a map mended so came from a
+      map in doubt, and only its own checks vouch for it.
 
     Measured on the shared sets and the hard copies: ``docs/decisions/every-pair.md``. Which
     conditions a map fails: :func:`distrust_reasons`."""
@@ -303,6 +332,8 @@ def distrust_reasons(check: MapCheck, correspondence, config: DenseConfig) -> tu
         reasons.append("it set aside feature matches the sparse stage was sure of")
     if in_doubt and not check.verdict.clear:
         reasons.append("the feature matches were in doubt and its seed did not stand clear of the others")
+    if check.verdict.left_out is not None:
+        reasons.append("a landmark pair the others contradicted was left out")
     if check.residual > config.trust_residual:  # NaN (no alignment): not a reason
         reasons.append(f"the alignment stayed {check.residual:.4f} sqrt(area) from its images, more than "
                        f"{config.trust_residual:g}")

@@ -110,6 +110,9 @@ class SeedVerdict:
         rival: the rank of the start without landmarks when it competed with a map from the
             matches that was not trusted (``DenseConfig.start_in_doubt``; its score in
             ``signatures``), else ``None``.
+        left_out: ``(source vertex, target vertex, displacement)`` (input numbering; sqrt(area)
+            units) of the landmark pair the others contradicted (:func:`contradicted_landmark`),
+            when the map made without it was taken, else ``None``.
     """
 
     seed: int
@@ -121,14 +124,19 @@ class SeedVerdict:
     start: str = "matches"
     start_from: str = ""
     rival: int | None = None
+    left_out: tuple | None = None
 
     def as_dict(self) -> dict:
-        """The fields as a dict (``start_from`` and ``rival`` only when set), as JSON records keep them."""
+        """The fields as a dict (``start_from``, ``rival`` and ``left_out`` only when set), as JSON
+        records keep them."""
         fields = dataclasses.asdict(self)
         if not self.start_from:
             del fields["start_from"]
-        if self.rival is None:
-            del fields["rival"]
+        for name in ("rival", "left_out"):
+            if fields[name] is None:
+                del fields[name]
+            elif name == "left_out":
+                fields[name] = list(fields[name])
         return fields
 
 
@@ -332,8 +340,90 @@ class _SeedScoring:
                                                                                           self.points)]
 
     def score(self, coords_1: np.ndarray, coords_2: np.ndarray) -> float:
+        """The signature score (lower is better) of the short map from landmark coordinates
+        ``coords_i (n_i, c)``."""
+        return signature_score(self.signatures[0], self.signatures[1][self.short_map(coords_1, coords_2)], self.config)
+
+    def short_map(self, coords_1: np.ndarray, coords_2: np.ndarray, sampled: bool = False) -> np.ndarray:
+        """``(p_1,)`` the short ZoomOut map from landmark coordinates ``coords_i (n_i, c)`` (with
+        ``sampled``, ``(p_i, c)``: at the scoring points already), from each of shape 1's
+        scoring points to one of shape 2's (positions in ``points``)."""
         (p_1, p_2), (b_1, b_2) = self.points, self.bases
-        f_1, f_2 = coords_1[p_1], coords_2[p_2]
+        f_1, f_2 = (coords_1, coords_2) if sampled else (coords_1[p_1], coords_2[p_2])
         c_12, c_21 = zoomout(b_1, b_2, nearest_rows(f_2, f_1), nearest_rows(f_1, f_2), self.config, f_1, f_2)
-        map_12 = map_embeddings(b_1, b_2, c_12, c_21, self.config, f_1, f_2).nearest()
-        return signature_score(self.signatures[0], self.signatures[1][map_12], self.config)
+        return map_embeddings(b_1, b_2, c_12, c_21, self.config, f_1, f_2).nearest()
+
+
+def contradicted_landmark(shape_1, shape_2, seed: Seed, config: DenseConfig, samples: tuple,
+                          bases: tuple) -> tuple[int, float] | None:
+    """``(i, displacement)``: the landmark pair of ``seed`` (position ``i`` in ``seed.source``)
+    that the others contradict most (the largest of :func:`landmark_displacements`), or
+    ``None`` for a seed of fewer than ``MIN_LANDMARKS + 1`` pairs (leaving one out would leave
+    too few)."""
+    displacements = landmark_displacements(shape_1, shape_2, seed, config, samples, bases)
+    if displacements is None:
+        return None
+    worst = int(np.argmax(displacements))
+    return worst, float(displacements[worst])
+
+
+def landmark_displacements(shape_1, shape_2, seed: Seed, config: DenseConfig, samples: tuple,
+                           bases: tuple) -> np.ndarray | None:
+    """``(k,)`` for each landmark pair of ``seed``, how far the others contradict it: the
+    geodesic distance (sqrt(area) units) on shape 2 from its target to where the short ZoomOut
+    map seeded by the other pairs alone sends its source (the scoring point nearest it, as
+    :class:`_SeedScoring` maps them). A wrong pair the consistency test kept (a front paw sent
+    to the other, whose distances to the remaining landmarks are alike by symmetry) is sent far
+    from its target by the others; a right one stays near it, but for a thin part no other
+    landmark holds in place (a tail tip: up to 0.25 on tosca-5k's dogs), or one whose short map
+    lost it (measured with ``benchmarks/landmark_check.py``: ``docs/decisions/every-pair.md``).
+    ``None`` for a seed of fewer than ``MIN_LANDMARKS + 1`` pairs. Costs one short ZoomOut per
+    pair (the coordinates are the seed's own columns)."""
+    count = len(seed.source)
+    if count < MIN_LANDMARKS + 1 or seed.fields_1 is None:
+        return None
+    scoring = _SeedScoring(shape_1, shape_2, config, samples, bases)
+    (p_1, p_2) = scoring.points
+    out = np.empty(count)
+    for i in range(count):
+        others = np.delete(np.arange(count), i)
+        coords_1, coords_2 = (_coordinates(fields[p], turns[p], others, config)
+                              for fields, turns, p in ((seed.fields_1, seed.turns_1, p_1),
+                                                       (seed.fields_2, seed.turns_2, p_2)))
+        map_12 = scoring.short_map(coords_1, coords_2, sampled=True)
+        nearest = int(np.argmin(seed.fields_1[p_1, i]))  # the scoring point nearest the source landmark
+        out[i] = seed.fields_2[p_2[map_12[nearest]], i]
+    return out
+
+
+def without_landmark(seed: Seed, i: int, config: DenseConfig) -> Seed:
+    """``seed`` without its landmark pair ``i``: the other pairs' distance and turn columns (the
+    turns are computed pair by pair, so these are exactly what
+    :func:`~darcyan.dense.landmarks.landmark_set` makes of the others); its rank kept, its
+    signature score 0 (not scored)."""
+    others = np.delete(np.arange(len(seed.source)), i)
+    pairs = _pair_columns(len(seed.source), others)
+    return Seed(seed.rank, seed.source[others], seed.target[others], seed.fields_1[:, others],
+                seed.fields_2[:, others], seed.turns_1[:, pairs], seed.turns_2[:, pairs],
+                _coordinates(seed.fields_1, seed.turns_1, others, config),
+                _coordinates(seed.fields_2, seed.turns_2, others, config), 0.0, seed.start, seed.start_from)
+
+
+def _pair_columns(count: int, kept: np.ndarray) -> np.ndarray:
+    """Columns of :func:`~darcyan.dense.landmarks.orientation_coordinates`' ``(a, b)`` pairs of
+    ``count`` landmarks (``np.triu_indices`` order) whose two landmarks are both ``kept``, in
+    the order the kept landmarks' own pairs take."""
+    a, b = np.triu_indices(count, k=1)
+    column = {(int(x), int(y)): j for j, (x, y) in enumerate(zip(a, b))}
+    kept = np.asarray(kept)
+    ka, kb = np.triu_indices(len(kept), k=1)
+    return np.array([column[(int(kept[x]), int(kept[y]))] for x, y in zip(ka, kb)], dtype=np.int64)
+
+
+def _coordinates(fields: np.ndarray, turns: np.ndarray, kept: np.ndarray, config: DenseConfig) -> np.ndarray:
+    """The landmark coordinates of :func:`~darcyan.dense.landmarks.landmark_set` for the ``kept``
+    landmarks only, from all landmarks' distances ``(n, k)`` and turns ``(n, k (k - 1) / 2)``."""
+    kept_fields = fields[:, kept]
+    if config.orientation_weight <= 0:
+        return kept_fields
+    return np.hstack([kept_fields, config.orientation_weight * turns[:, _pair_columns(fields.shape[1], kept)]])
