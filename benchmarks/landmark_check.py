@@ -7,8 +7,9 @@ and wrong pairs.
 
 Every map is checked here, trusted or not, as it was made with all its pairs (``dense_map``
 checks only the maps in doubt, and goes on without the pair it finds). A pair
-is right when its target lies within 0.05 sqrt(area) of the true correspondent of its source
-(``.vts`` ground truth; pairs whose source has no listed correspondent are "unknown").
+is right when its target lies within 0.05 sqrt(area) (the scores' threshold) of the true correspondent of its source
+(``.vts`` ground truth, or the identity where a dataset has one numbering; pairs whose source
+has no listed correspondent are "unknown").
 """
 
 from __future__ import annotations
@@ -20,27 +21,27 @@ from pathlib import Path
 
 import numpy as np
 
-RIGHT = 0.05  # sqrt(area): a landmark pair within this of the truth is right
-
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("dataset", type=Path, help="a folder of meshes with corres/*.vts")
-    parser.add_argument("--pairs", type=Path, required=True, help="a file of 'source target' lines")
+    parser.add_argument("--pairs", type=Path, required=True, help="a file of 'source<TAB>target[<TAB>group]' lines")
     parser.add_argument("--repair", action="store_true")
     args = parser.parse_args(argv)
 
     import darcyan
+    from darcyan.bench.datasets import discover_dataset, read_pairs
     from darcyan.dense.config import DenseConfig
     from darcyan.dense.landmarks import landmark_set
     from darcyan.dense.seeds import Seed, landmark_displacements
     from darcyan.dense.zoomout import dense_basis, zoomout_samples
-    from darcyan.eval.metrics import GroundTruth, read_vts
+    from darcyan.eval.metrics import DEFAULT_THRESHOLD, GroundTruth, read_vts
 
     config = DenseConfig()
     every = dataclasses.replace(config, landmarks="all")
     unchecked = dataclasses.replace(config, landmark_contradiction=0.0)
-    pairs = [line.split() for line in args.pairs.read_text().splitlines() if line.strip()]
+    dataset = discover_dataset(args.dataset)
+    pairs = read_pairs(args.pairs, dataset)
     rows = {"right": [], "wrong": [], "unknown": []}
     for source, target in pairs:
         files = [args.dataset / f"{name}.off" for name in (source, target)]
@@ -54,12 +55,12 @@ def main(argv=None) -> int:
         samples = zoomout_samples(shape_1, shape_2, config)
         bases = dense_basis(shape_1, config), dense_basis(shape_2, config)
         moved = landmark_displacements(shape_1, shape_2, seed, config, samples, bases)
-        truth = GroundTruth(read_vts(args.dataset / "corres" / f"{source}.vts"),
-                            read_vts(args.dataset / "corres" / f"{target}.vts"))
+        truth = GroundTruth.identity() if dataset.truth == "identity" else \
+            GroundTruth(read_vts(dataset.vts(source)), read_vts(dataset.vts(target)))
         errors = _errors(shape_1, shape_2, seed, truth)
         cells = []
         for i in range(len(seed.source)):
-            kind = "unknown" if np.isnan(errors[i]) else "right" if errors[i] <= RIGHT else "wrong"
+            kind = "unknown" if np.isnan(errors[i]) else "right" if errors[i] <= DEFAULT_THRESHOLD else "wrong"
             if moved is not None:
                 rows[kind].append((float(moved[i]), f"{source} -> {target}"))
             cells.append(f"{'-' if moved is None else f'{moved[i]:.3f}'} ({kind})")
@@ -86,13 +87,16 @@ class _Pairs:
 def _errors(shape_1, shape_2, seed, truth) -> np.ndarray:
     """``(k,)`` each landmark pair's error (geodesic, sqrt(area)) against ``truth``, NaN where
     its source has no listed correspondent."""
-    listed = {int(v): i for i, v in enumerate(truth.source_samples)}
+    identity = truth.source_samples is None  # one vertex numbering (tosca-hires within a class)
+    listed = {} if identity else {int(v): i for i, v in enumerate(truth.source_samples)}
     scale = np.sqrt(shape_2.mesh.area())
     out = np.full(len(seed.source), np.nan)
     for i, (s, t) in enumerate(zip(seed.source, seed.target)):
-        row = listed.get(int(shape_1.mesh.input_index[s]))
-        if row is not None:
-            true = shape_2.mesh_index(truth.target_samples[row:row + 1], nearest=True)[0]
+        source_input = int(shape_1.mesh.input_index[s])
+        row = listed.get(source_input)
+        true_input = np.array([source_input]) if identity else None if row is None else truth.target_samples[row:row + 1]
+        if true_input is not None:
+            true = shape_2.mesh_index(true_input, nearest=True)[0]
             out[i] = shape_2.solver.distance(int(true))[int(t)] / scale
     return out
 

@@ -112,3 +112,22 @@ def test_the_seed_verdict_says_how_the_map_was_started():
     assert "the map from the matchings was not trusted" in _seed_verdict(taken) and "axes ++" in _seed_verdict(taken)
     fallback = seed_check(2, {2: 0.05}, 0.04, "spectral", "spectral +-+-").as_dict()
     assert "fewer than 3 consistent ones" in _seed_verdict(fallback) and "rival" not in fallback
+
+
+def test_the_seed_verdict_names_a_landmark_pair_left_out():
+    """A verdict with ``left_out`` (kept in JSON records as a list) says which pair went, how far
+    the others sent it, and that the feature matches are read from the map."""
+    import dataclasses
+    import json
+
+    from darcyan.cli import _seed_verdict
+    from darcyan.dense.seeds import seed_check
+
+    verdict = dataclasses.replace(seed_check(0, {0: 0.10, 4: 0.09}, 0.04, rival=4), left_out=(3312, 3592, 0.5771))
+    about = json.loads(json.dumps(verdict.as_dict()))  # as a record keeps it
+    assert about["left_out"] == [3312, 3592, 0.5771]
+    said = _seed_verdict(about)
+    assert ("the landmark pair 3312 -> 3592 left out (the other pairs sent its source 0.58 sqrt(area) away), "
+            "the feature matches read from the map") in said
+    assert said.index("left out") < said.index("a start without the feature matches")
+    assert "left_out" not in seed_check(0, {0: 0.1}, 0.04).as_dict()

@@ -53,7 +53,8 @@ def test_landmarks_decide_the_map(figure_pair):
     shape_1, shape_2, _ = figure_pair
     tips = synthetic.figure_tips()
     rolled = tip_correspondence(tips, np.roll(tips, 1))
-    result = dense_map(shape_1, shape_2, rolled, dataclasses.replace(FAST_DENSE, landmarks="all", start_in_doubt=False))
+    result = dense_map(shape_1, shape_2, rolled, dataclasses.replace(FAST_DENSE, landmarks="all", start_in_doubt=False,
+                                                                 landmark_contradiction=0.0))
     score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED, target_solver=shape_2.solver)
     assert score.rate < 0.5
 

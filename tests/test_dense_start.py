@@ -91,7 +91,7 @@ def test_a_wrong_matching_gives_way_to_the_start_without_landmarks(figure_pair):
     verdict = result.check.verdict
     assert verdict.seed == verdict.rival == 1 and set(verdict.signatures) == {0, 1}
     assert rate(result) >= DENSE_MIN_RATE
-    alone = dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, start_in_doubt=False))
+    alone = dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, start_in_doubt=False, landmark_contradiction=0.0))
     assert alone.check.start == "matches" and not alone.check.trusted and rate(alone) < 0.2
     # The feature matches are read back from the map that won: right (the shared numbering) where
     # the wrong matching had none right, that matching kept as the first alternative.

@@ -114,11 +114,17 @@ def landmark_set(shape_1, shape_2, matching, config: DenseConfig, fields: tuple)
     if len(src) < MIN_LANDMARKS:
         return None
     turns_1, turns_2 = orientation_coordinates(shape_1, fields_1), orientation_coordinates(shape_2, fields_2)
-    coords_1, coords_2 = fields_1, fields_2
-    if config.orientation_weight > 0:
-        coords_1 = np.hstack([fields_1, config.orientation_weight * turns_1])
-        coords_2 = np.hstack([fields_2, config.orientation_weight * turns_2])
-    return src, tgt, fields_1, fields_2, turns_1, turns_2, coords_1, coords_2
+    return (src, tgt, fields_1, fields_2, turns_1, turns_2, coordinates_of(fields_1, turns_1, config),
+            coordinates_of(fields_2, turns_2, config))
+
+
+def coordinates_of(fields: np.ndarray, turns: np.ndarray, config: DenseConfig) -> np.ndarray:
+    """``(n, k [+ k (k - 1) / 2])`` the landmark coordinates: the distances to the landmarks
+    ``fields (n, k)`` beside their turns ``turns (n, k (k - 1) / 2)``
+    (:func:`orientation_coordinates`) weighed by ``config.orientation_weight`` (none at 0)."""
+    if config.orientation_weight <= 0:
+        return fields
+    return np.hstack([fields, config.orientation_weight * turns])
 
 
 def landmark_coordinates(shape_1, shape_2, matching, config: DenseConfig = DenseConfig()) -> tuple:

@@ -153,32 +153,18 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     check = _checked(shape_1, local, seed, check_of_seeds(seed, choice.seeds, config.seed_margin), residual,
                      correspondence, config)
     pairs = (seed.source, seed.target)
-    in_doubt = not check.trusted and check.start == "matches" and config.start_in_doubt and config.method == "zoomout"
+    doubted = not check.trusted and check.start == "matches" and config.method == "zoomout"
     scored = len(choice.seeds) > 1 or seed.signature > 0  # a lone seed is not scored (0)
-    if in_doubt and config.landmark_contradiction > 0:
-        # A wrong landmark pair the consistency test kept (right distances by symmetry) ruins its
-        # region: the others, alone, send its source elsewhere.
-        t = time.perf_counter()
-        found = contradicted_landmark(shape_1, shape_2, seed, config, choice.samples, choice.bases)
-        timings["landmark check"] = time.perf_counter() - t
-        if found is not None and found[1] > config.landmark_contradiction:
-            say("a landmark pair the others contradict left out")
-            i, displacement = found
-            reduced = without_landmark(seed, i, config)
-            reduced_local, reduced_residual = _map_of_seed(shape_1, shape_2, reduced, config, choice, say, timings,
-                                                           "reduced ")
-            left_out = (int(shape_1.mesh.input_index[seed.source[i]]), int(shape_2.mesh.input_index[seed.target[i]]),
-                        round(displacement, 4))
-            reduced_check = _checked(shape_1, reduced_local, reduced,
-                                     dataclasses.replace(check.verdict, left_out=left_out), reduced_residual,
-                                     correspondence, config)
-            # Two judges beside the contradiction: the alignment follows it at least as closely
-            # (NaN without alignment: not a judge) and its orientation agrees at least as well.
-            if not reduced_residual > residual and reduced_check.orientation >= check.orientation:
-                local, residual, check, seed = reduced_local, reduced_residual, reduced_check, reduced
-                pairs = (seed.source, seed.target)
-                choice = dataclasses.replace(choice, seed=seed)
-                scored = False  # its signature is not yet scored: the rival start scores it
+    if doubted and config.landmark_contradiction > 0:
+        mended = _without_contradicted(shape_1, shape_2, seed, residual, check, correspondence, config, choice, say,
+                                       timings)
+        if mended is not None:
+            local, residual, check, seed = mended
+            pairs = (seed.source, seed.target)
+            choice = dataclasses.replace(choice, seed=seed)
+            scored = False  # its signature is not yet scored: the rival start scores it
+        del mended
+    in_doubt = doubted and config.start_in_doubt
     if in_doubt:
         # The map from the matches is in doubt: the start without landmarks competes with its seed.
         say("spectral start (the map from the matches is not trusted)")
@@ -212,6 +198,34 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([shape_1.mesh.input_index[pairs[0]], shape_2.mesh.input_index[pairs[1]]], axis=1)
     return DenseMap(target, landmarks, timings, check)
+
+
+def _without_contradicted(shape_1, shape_2, seed, residual: float, check: MapCheck, correspondence,
+                          config: DenseConfig, choice, say, timings: dict) -> tuple | None:
+    """``(local (n1,), residual, check, seed)`` of the map made without the landmark pair of
+    ``seed`` the others contradict (:func:`~darcyan.dense.seeds.contradicted_landmark`: beyond
+    ``config.landmark_contradiction``), when it is taken: its alignment follows it at least as
+    closely as the map of ``seed`` (``residual``; NaN without alignment: not a judge) and it
+    agrees at least as well with its own landmarks' orientation as that map did with all of
+    them (``check.orientation``). ``None`` otherwise (no pair contradicted, too few pairs to
+    leave one out, or the map refused). One pair, once: of two wrong pairs one is left."""
+    t = time.perf_counter()
+    found = contradicted_landmark(shape_1, shape_2, seed, config, choice.samples, choice.bases)
+    timings["landmark check"] = time.perf_counter() - t
+    if found is None or not found[1] > config.landmark_contradiction:
+        return None
+    say("a map without the landmark pair the others contradict")
+    i, displacement = found
+    reduced = without_landmark(seed, i, config)
+    local, reduced_residual = _map_of_seed(shape_1, shape_2, reduced, config, choice, say, timings, "reduced ")
+    left_out = (int(shape_1.mesh.input_index[seed.source[i]]), int(shape_2.mesh.input_index[seed.target[i]]),
+                round(displacement, 4))
+    reduced_check = _checked(shape_1, local, reduced, dataclasses.replace(check.verdict, left_out=left_out),
+                             reduced_residual, correspondence, config)
+    # Two judges beside the contradiction, which a right pair a short map lost also shows.
+    if not reduced_residual > residual and reduced_check.orientation >= check.orientation:
+        return local, reduced_residual, reduced_check, reduced
+    return None
 
 
 def _map_of_seed(shape_1, shape_2, seed, config: DenseConfig, choice, say, timings: dict, stage: str = "") -> tuple:
@@ -351,7 +365,8 @@ def input_map(shape_1, shape_2, local: np.ndarray) -> np.ndarray:
 
 
 def matching_of_map(correspondence, made: DenseMap, description_1, description_2, shape_2):
-    """The feature matches that a dense map started without them reads: each feature point of
+    """The feature matches that a dense map started without them (or made without a landmark
+    pair the others contradicted) reads: each feature point of
     the source paired with the target's feature point nearest its image (geodesic distance on
     the target), where that feature point's nearest image is this one's: mutual nearest, so no
     distance threshold is needed, and a feature point whose image lies between two of the

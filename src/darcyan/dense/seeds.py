@@ -22,7 +22,7 @@ from ..errors import DarcyanError
 from ..geometry.knn import nearest_rows
 from ..parallel import owns_threads
 from .config import DenseConfig
-from .landmarks import MIN_LANDMARKS, landmark_set
+from .landmarks import MIN_LANDMARKS, coordinates_of, landmark_set
 from .signatures import point_signature, signature_score
 from .zoomout import dense_basis, map_embeddings, seed_subset, zoomout, zoomout_samples
 
@@ -411,19 +411,13 @@ def without_landmark(seed: Seed, i: int, config: DenseConfig) -> Seed:
 
 def _pair_columns(count: int, kept: np.ndarray) -> np.ndarray:
     """Columns of :func:`~darcyan.dense.landmarks.orientation_coordinates`' ``(a, b)`` pairs of
-    ``count`` landmarks (``np.triu_indices`` order) whose two landmarks are both ``kept``, in
-    the order the kept landmarks' own pairs take."""
+    ``count`` landmarks (``np.triu_indices`` order) whose two landmarks are both among ``kept``
+    (ascending, as ``np.delete`` leaves them): the order the kept landmarks' own pairs take."""
     a, b = np.triu_indices(count, k=1)
-    column = {(int(x), int(y)): j for j, (x, y) in enumerate(zip(a, b))}
-    kept = np.asarray(kept)
-    ka, kb = np.triu_indices(len(kept), k=1)
-    return np.array([column[(int(kept[x]), int(kept[y]))] for x, y in zip(ka, kb)], dtype=np.int64)
+    return np.flatnonzero(np.isin(a, kept) & np.isin(b, kept))
 
 
 def _coordinates(fields: np.ndarray, turns: np.ndarray, kept: np.ndarray, config: DenseConfig) -> np.ndarray:
-    """The landmark coordinates of :func:`~darcyan.dense.landmarks.landmark_set` for the ``kept``
-    landmarks only, from all landmarks' distances ``(n, k)`` and turns ``(n, k (k - 1) / 2)``."""
-    kept_fields = fields[:, kept]
-    if config.orientation_weight <= 0:
-        return kept_fields
-    return np.hstack([kept_fields, config.orientation_weight * turns[:, _pair_columns(fields.shape[1], kept)]])
+    """The landmark coordinates (:func:`~darcyan.dense.landmarks.coordinates_of`) of the ``kept``
+    landmarks (ascending) only, from all landmarks' distances ``(n, k)`` and turns ``(n, k (k - 1) / 2)``."""
+    return coordinates_of(fields[:, kept], turns[:, _pair_columns(fields.shape[1], kept)], config)
