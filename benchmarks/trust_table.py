@@ -4,7 +4,8 @@ Reads the ``pairs.jsonl`` of each bench output folder given and prints, per fold
 pairs, those with no map, those whose map collapsed (fewer than ``--right`` of the sampled vertices
 within 0.05: 80%) and those wholly wrong (at most 1%), the pooled share within 0.05 and mean
 geodesic error (x100, over mapped samples), how each map was started (``matches``, ``spectral`` when
-no matching gave three consistent landmarks, ``rival`` when the start without landmarks won over a
+no matching gave three consistent landmarks, ``left out`` for a map from the matches made without a
+landmark pair the others contradicted, ``rival`` when the start without landmarks won over a
 map from the matches that was not trusted), and the table of trusted against right: a flag worth
 acting on marks no collapsed map trusted. For the maps started without the feature matches, the
 sparse stage's matches against those read from the map (``seed_correct`` of the dense record:
@@ -48,6 +49,8 @@ def summary(records: list, right: float, residual_below: float | None = None) ->
         start = check.get("start", "matches")
         if start == "spectral" and check.get("rival") is not None:
             start = "rival"  # the start without landmarks, taken over a map from the matches in doubt
+        elif start == "matches" and check.get("left_out") is not None:
+            start = "left out"  # from the matches, without the landmark pair the others contradicted
         starts[start] = starts.get(start, 0) + 1
     return {"pairs": len(records), "no map": len(records) - len(mapped), "collapsed": int((~good).sum()),
             "wholly wrong": int((rates <= 0.01).sum()), "within": within / samples if samples else float("nan"),
