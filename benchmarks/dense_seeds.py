@@ -61,9 +61,10 @@ def _score_pair(task: tuple) -> dict:
     matchings = [correspondence] + list(correspondence.alternatives)
     # A spectral start (no matching with three consistent landmarks) is one seed past the matchings.
     signatures = {rank: score for rank, score in signatures.items() if rank < len(matchings)}
-    # Each seed's own map: no rival start for a map in doubt (start_in_doubt off), or it would not be the seed's.
-    maps = {rank: dense_map(*shapes, matchings[rank], DenseConfig(candidates=1, start_in_doubt=False)).target
-            for rank in signatures}
+    # Each seed's own map: no rival start for a map in doubt (start_in_doubt off) and no landmark
+    # pair left out (landmark_contradiction 0), or it would not be the seed's.
+    alone = DenseConfig(candidates=1, start_in_doubt=False, landmark_contradiction=0.0)
+    maps = {rank: dense_map(*shapes, matchings[rank], alone).target for rank in signatures}
     maps["default"] = default.target
     scores = evaluate_dense_maps(shapes[0].mesh, shapes[1].mesh, maps, truth, SAMPLES, target_solver=shapes[1].solver)
     by_size = {size: seed_scores(*shapes, correspondence, DenseConfig(seed_basis=size)) for size in sizes}

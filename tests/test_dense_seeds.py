@@ -228,7 +228,7 @@ def test_a_landmark_pair_the_others_contradict_is_found(figure_pair):
         others = np.delete(np.arange(len(tips)), i)
         made = landmark_set(shape_1, shape_2, tip_correspondence(tips[others], wrong.target[others]), every, ({}, {}))
         for got, expected in zip(dataclasses.astuple(reduced)[1:9], made):
-            assert np.allclose(got, expected, rtol=0, atol=1e-12)
+            assert got.shape == expected.shape and np.allclose(got, expected, rtol=0, atol=1e-12)
         assert reduced.rank == wrong.rank and reduced.signature == 0.0
     three = seed_of(tips)
     three = dataclasses.replace(three, source=three.source[:3], target=three.target[:3])
@@ -259,7 +259,7 @@ def test_a_wrong_landmark_pair_the_consistency_test_kept_is_left_out(tosca):
               for name, m in maps.items()}
     assert scores["unchecked"].rate < 0.75 and maps["unchecked"].check.verdict.left_out is None
     left_out = maps["checked"].check.verdict.left_out
-    assert left_out is not None and left_out[2] > DenseConfig().landmark_contradiction
+    assert left_out is not None and left_out[2] >= DenseConfig().landmark_contradiction  # (rounded as recorded)
     dropped = _Pair(np.array([left_out[0]]), np.array([left_out[1]]))
     assert score_matches(*shapes, dropped, truth).correct == 0  # the pair left out was wrong
     assert len(maps["checked"].landmarks) == len(maps["unchecked"].landmarks) - 1
@@ -289,15 +289,23 @@ def test_a_map_in_doubt_goes_on_without_the_pair_the_others_contradict(figure_pa
     for config in (doubted, dataclasses.replace(doubted, alignment_rounds=0)):
         result = dense_map(shape_1, shape_2, wrong, config)
         assert result.check.verdict.left_out[:2] == (int(tips[4]), middle)
-        assert result.check.verdict.left_out[2] > config.landmark_contradiction
+        assert result.check.verdict.left_out[2] >= config.landmark_contradiction  # (rounded as recorded)
         assert len(result.landmarks) == 4 and "reduced zoomout" in result.timings
         assert not result.check.trusted and "a landmark pair the others contradicted was left out" in \
             result.check.doubts
         score = evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=300, target_solver=shape_2.solver)
         assert score.rate >= 0.9
+    # the feature matches read from the map: all right (the poses share one numbering: a source
+    # vertex's truth is the same vertex), where the wrong matching had a pair 0.5 off
     read = matches_of_map(wrong, result, shape_1.description, shape_2.description, shape_2.shape)
-    assert read.alternatives[0] is wrong and [int(tips[4]), middle] not in \
-        np.stack([read.source_vertex, read.target_vertex], axis=1).tolist()
+    scale = np.sqrt(shape_2.shape.mesh.area())
+
+    def worst(matches):
+        return max(shape_2.shape.solver.distance(int(s))[int(t)] / scale
+                   for s, t in zip(matches.source_vertex, matches.target_vertex))
+
+    assert read.alternatives[0] is wrong and len(read) >= 4
+    assert worst(read) < 0.05 < worst(wrong)
     unchecked = dense_map(shape_1, shape_2, wrong, dataclasses.replace(doubted, landmark_contradiction=0.0))
     assert unchecked.check.verdict.left_out is None and "landmark check" not in unchecked.timings
     assert len(unchecked.landmarks) == 5
