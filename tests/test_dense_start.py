@@ -44,6 +44,7 @@ def test_too_few_landmarks_still_give_a_right_map(figure_pair, given):
     assert score.rate >= DENSE_MIN_RATE and score.mean <= DENSE_MAX_MEAN
     assert result.check.orientation > 0.5
     assert not result.check.trusted  # landmarks from a short map nothing else checked
+    assert "landmark check" in result.timings  # its landmark pairs checked against each other
 
 
 @pytest.mark.slow

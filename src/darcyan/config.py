@@ -450,9 +450,9 @@ class DenseConfig:
             ``MapCheck.residual``). A wrong sparse matching (or an alternative that beat a right
             one by a hair) ruins a whole map, and the start without landmarks does not depend on
             it. Costs a clear pair nothing (``docs/decisions/every-pair.md``).
-        landmark_contradiction: a ZoomOut map from the matches that is not trusted has its
-            landmark pairs checked against each other (before the start without landmarks, and
-            whether or not that start runs): each pair's source is sent by the short map seeded
+        landmark_contradiction: a ZoomOut map that is not trusted (from the matches, or from
+            the landmarks of the start without them) has its landmark pairs checked against each
+            other (before the start without landmarks competes, and whether or not it does): each pair's source is sent by the short map seeded
             by the other pairs alone (the seeds' scoring map: ``seed_basis``, ``seed_samples``),
             and when the farthest image lies more than this (geodesic, sqrt(area) units) from
             its pair's target, a map is made without that pair, and taken when its alignment

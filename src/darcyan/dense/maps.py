@@ -6,8 +6,8 @@
    one whose short ZoomOut best keeps the curvature signature (:mod:`darcyan.dense.signatures`),
    or, when none gives three consistent landmarks, the landmarks of a short map started from
    the spectra or the axes of inertia (:mod:`darcyan.dense.start`); when the map from the
-   matches is not trusted, a landmark pair the others contradict is left out
-   (``DenseConfig.landmark_contradiction``), then that start competes with its seed, scored
+   matches (or from that start) is not trusted, a landmark pair the others contradict is left
+   out (``DenseConfig.landmark_contradiction``), then that start competes with its seed, scored
    alike, and its map is taken when it scores clearly better and the alignment follows it more
    closely (``DenseConfig.start_in_doubt``);
 2. its landmarks (:mod:`darcyan.dense.landmarks`): the consistent matches, and each vertex's
@@ -153,7 +153,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     check = _checked(shape_1, local, seed, check_of_seeds(seed, choice.seeds, config.seed_margin), residual,
                      correspondence, config)
     pairs = (seed.source, seed.target)
-    doubted = not check.trusted and check.start == "matches" and config.method == "zoomout"
+    doubted = not check.trusted and config.method == "zoomout"  # from the matches or started without them
     scored = len(choice.seeds) > 1 or seed.signature > 0  # a lone seed is not scored (0)
     if doubted and config.landmark_contradiction > 0:
         mended = _without_contradicted(shape_1, shape_2, seed, residual, check, correspondence, config, choice, say,
@@ -164,7 +164,7 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             choice = dataclasses.replace(choice, seed=seed)
             scored = False  # its signature is not yet scored: the rival start scores it
         del mended
-    in_doubt = doubted and config.start_in_doubt
+    in_doubt = doubted and check.start == "matches" and config.start_in_doubt
     if in_doubt:
         # The map from the matches is in doubt: the start without landmarks competes with its seed.
         say("spectral start (the map from the matches is not trusted)")
