@@ -452,17 +452,17 @@ class DenseConfig:
             it. Costs a clear pair nothing (``docs/decisions/every-pair.md``).
         landmark_contradiction: a ZoomOut map that is not trusted (from the matches, or from
             the landmarks of the start without them) has its landmark pairs checked against each
-            other (before the start without landmarks competes, and whether or not it does): each pair's source is sent by the short map seeded
-            by the other pairs alone (the seeds' scoring map: ``seed_basis``, ``seed_samples``),
-            and when the farthest image lies more than this (geodesic, sqrt(area) units) from
-            its pair's target, a map is made without that pair, and taken when its alignment
-            follows it at least as closely and it agrees at least as well with its own
-            landmarks' orientation (without alignment, the orientation alone) (``SeedVerdict.left_out``;
-            one pair, once; 0: never). A wrong pair whose distances to the others are right by
-            symmetry (a front paw sent to the other) survives the consistency test and ruins
-            its region; right pairs mostly stay within 0.25 of their targets, but a short map
-            that lost a limb sends one farther, hence the two judges
-            (``docs/decisions/every-pair.md``).
+            other, before the start without landmarks competes and whether or not it does: each
+            pair's source is sent by the short map seeded by the other pairs alone (the seeds'
+            scoring map: ``seed_basis``, ``seed_samples``), and when the farthest image lies
+            more than this (geodesic, sqrt(area) units) from its pair's target, a map is made
+            without that pair, and taken when its alignment follows it at least as closely and
+            it agrees at least as well with its own landmarks' orientation (without alignment,
+            the orientation alone) (``SeedVerdict.left_out``; one pair, once; 0: never). A wrong
+            pair whose distances to the others are right by symmetry (a front paw sent to the
+            other) survives the consistency test and ruins its region; right pairs mostly stay
+            within 0.25 of their targets, but a short map that lost a limb sends one farther,
+            hence the two judges (``docs/decisions/every-pair.md``).
         alignment_slack: a vertex keeps ZoomOut's image where the aligned image's geodesic
             distances to the landmarks differ from the vertex's own by more than this (sqrt(area)
             units) beyond those of ZoomOut's image: two fingers side by side are near in space,
