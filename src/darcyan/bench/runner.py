@@ -278,15 +278,23 @@ def _open_run(out: Path, dataset: Dataset, settings: BenchSettings, resume: bool
     info = _load_info(out) if resume else {}
     if resume and journal_path.exists():
         before = info.get("settings")
-        if before is not None and (_comparable(before) != settings.comparable()
-                                   or info.get("dataset") != str(dataset.root.resolve())):
-            raise DarcyanError(f"{out}: the results there were made with other settings or another dataset; "
+        if before is not None and info.get("dataset") != str(dataset.root.resolve()):
+            raise DarcyanError(f"{out}: the results there were made on another dataset ({info.get('dataset')}); "
+                               f"use another --out, or run without --resume to start again")
+        now = json.loads(json.dumps(settings.as_dict()))
+        # A setting the earlier run did not have (a darcyan before it) counts as different: its
+        # results were made without it, whatever its default does now.
+        changed = [] if before is None else _differences(
+            {k: v for k, v in before.items() if k not in ("methods", "dense")},
+            {k: v for k, v in now.items() if k not in ("methods", "dense")})
+        if before is not None and (changed or _comparable(before) != settings.comparable()):
+            raise DarcyanError(f"{out}: the results there were made with other settings ({_listed(changed)}); "
                                f"use another --out, or run without --resume to start again")
         earlier_dense = (before or {}).get("dense")
-        now_dense = json.loads(json.dumps(settings.dense_settings()))
+        now_dense = now.get("dense")
         if earlier_dense and now_dense and earlier_dense != now_dense:
             raise DarcyanError(f"{out}: the dense results there were made with other dense settings "
-                               f"({earlier_dense['samples']} samples, seed {earlier_dense['seed']}); use another "
+                               f"({_listed(_differences(earlier_dense, now_dense, 'dense.'))}); use another "
                                f"--out, or run without --resume to start again")
         dense_settings = now_dense or earlier_dense
         text = journal_path.read_text()
@@ -312,6 +320,32 @@ def _open_run(out: Path, dataset: Dataset, settings: BenchSettings, resume: bool
             "mirror": info.get("mirror", {})}
     save_json(out / SETTINGS, info)
     return records
+
+
+def _differences(before, now, prefix: str = "") -> list:
+    """Dotted names of the settings that differ between an earlier run's ``before`` and ``now``
+    (as ``run.json`` keeps them), ``name (new)`` for one the earlier run did not have and
+    ``name (gone)`` for one it had that no longer exists."""
+    if not (isinstance(before, dict) and isinstance(now, dict)):
+        return [] if before == now else [prefix.rstrip(".") or "settings"]
+    out = []
+    for key in sorted(set(before) | set(now), key=str):
+        name = f"{prefix}{key}"
+        if key not in before:
+            out.append(f"{name} (new)")
+        elif key not in now:
+            out.append(f"{name} (gone)")
+        else:
+            out.extend(_differences(before[key], now[key], name + "."))
+    return out
+
+
+def _listed(names: list, most: int = 4) -> str:
+    """``names`` for a message: the first ``most``, then how many more."""
+    if not names:
+        return "settings"
+    more = f" and {len(names) - most} more" if len(names) > most else ""
+    return ", ".join(names[:most]) + more
 
 
 def _comparable(stored: dict) -> dict | None:
