@@ -7,9 +7,11 @@ and wrong pairs.
 
 Every map is checked here, trusted or not, as it was made with all its pairs (``dense_map``
 checks only the maps in doubt, and goes on without the pair it finds). A pair
-is right when its target lies within 0.05 sqrt(area) (the scores' threshold) of the true correspondent of its source
-(``.vts`` ground truth, or the identity where a dataset has one numbering; pairs whose source
-has no listed correspondent are "unknown").
+is right when its target lies within 0.05 sqrt(area) (the scores' threshold) of the true
+correspondent of its source, scored as ``darcyan bench`` scores matches
+(:func:`darcyan.eval.metrics.score_matches`: ``.vts`` ground truth read at the listed sample
+nearest the source, or the identity where a dataset has one numbering); "unknown" where the
+truth has no correspondent on the prepared target.
 """
 
 from __future__ import annotations
@@ -35,7 +37,8 @@ def main(argv=None) -> int:
     from darcyan.dense.landmarks import landmark_set
     from darcyan.dense.seeds import Seed, landmark_displacements
     from darcyan.dense.zoomout import dense_basis, zoomout_samples
-    from darcyan.eval.metrics import DEFAULT_THRESHOLD, GroundTruth, read_vts
+    from darcyan.eval.metrics import DEFAULT_THRESHOLD, GroundTruth, read_vts, score_matches
+    from darcyan.method.pipeline import Correspondence
 
     config = DenseConfig()
     every = dataclasses.replace(config, landmarks="all")
@@ -50,14 +53,16 @@ def main(argv=None) -> int:
                                     dense_config=unchecked).pairs[0]
         shape_1, shape_2 = (getattr(s, "shape", s) for s in result.shapes)
         landmarks = result.dense.landmarks
-        matched = _Pairs(landmarks[:, 0], landmarks[:, 1])
+        matched = Correspondence(landmarks[:, 0], landmarks[:, 1], np.zeros(len(landmarks)), None)
         seed = Seed(0, *landmark_set(shape_1, shape_2, matched, every, ({}, {})), 0.0)
         samples = zoomout_samples(shape_1, shape_2, config)
         bases = dense_basis(shape_1, config), dense_basis(shape_2, config)
         moved = landmark_displacements(shape_1, shape_2, seed, config, samples, bases)
         truth = GroundTruth.identity() if dataset.truth == "identity" else \
             GroundTruth(read_vts(dataset.vts(source)), read_vts(dataset.vts(target)))
-        errors = _errors(shape_1, shape_2, seed, truth)
+        kept = Correspondence(shape_1.mesh.input_index[seed.source], shape_2.mesh.input_index[seed.target],
+                              np.zeros(len(seed.source)), None)
+        errors = score_matches(shape_1, shape_2, kept, truth).errors  # as darcyan bench scores matches
         cells = []
         for i in range(len(seed.source)):
             kind = "unknown" if np.isnan(errors[i]) else "right" if errors[i] <= DEFAULT_THRESHOLD else "wrong"
@@ -72,33 +77,6 @@ def main(argv=None) -> int:
             top = ", ".join(f"{v:.2f} ({name})" for v, name in sorted(values, reverse=True)[:3])
             print(f"| {kind} | {len(d)} | {np.median(d):.3f} | {np.quantile(d, 0.9):.3f} | {top} |")
     return 0
-
-
-@dataclasses.dataclass(frozen=True)
-class _Pairs:
-    source_vertex: np.ndarray
-    target_vertex: np.ndarray
-
-    @property
-    def distance(self) -> np.ndarray:
-        return np.zeros(len(self.source_vertex))
-
-
-def _errors(shape_1, shape_2, seed, truth) -> np.ndarray:
-    """``(k,)`` each landmark pair's error (geodesic, sqrt(area)) against ``truth``, NaN where
-    its source has no listed correspondent."""
-    identity = truth.source_samples is None  # one vertex numbering (tosca-hires within a class)
-    listed = {} if identity else {int(v): i for i, v in enumerate(truth.source_samples)}
-    scale = np.sqrt(shape_2.mesh.area())
-    out = np.full(len(seed.source), np.nan)
-    for i, (s, t) in enumerate(zip(seed.source, seed.target)):
-        source_input = int(shape_1.mesh.input_index[s])
-        row = listed.get(source_input)
-        true_input = np.array([source_input]) if identity else None if row is None else truth.target_samples[row:row + 1]
-        if true_input is not None:
-            true = shape_2.mesh_index(true_input, nearest=True)[0]
-            out[i] = shape_2.solver.distance(int(true))[int(t)] / scale
-    return out
 
 
 if __name__ == "__main__":

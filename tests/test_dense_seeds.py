@@ -245,11 +245,6 @@ def test_a_wrong_landmark_pair_the_consistency_test_kept_is_left_out(tosca):
     import darcyan
     from darcyan.eval.metrics import score_matches
 
-    @dataclasses.dataclass
-    class _Pair:
-        source_vertex: np.ndarray
-        target_vertex: np.ndarray
-
     folder = tosca / "tosca-5k"
     shapes, correspondence, truth = faust_pair(folder, "cat4", "cat8")
     result = darcyan.correspond(folder / "cat4.off", folder / "cat8.off", dense=True, cache=False).pairs[0]
@@ -260,7 +255,7 @@ def test_a_wrong_landmark_pair_the_consistency_test_kept_is_left_out(tosca):
     assert scores["unchecked"].rate < 0.75 and maps["unchecked"].check.verdict.left_out is None
     left_out = maps["checked"].check.verdict.left_out
     assert left_out is not None and left_out[2] >= DenseConfig().landmark_contradiction  # (rounded as recorded)
-    dropped = _Pair(np.array([left_out[0]]), np.array([left_out[1]]))
+    dropped = tip_correspondence([left_out[0]], [left_out[1]])
     assert score_matches(*shapes, dropped, truth).correct == 0  # the pair left out was wrong
     assert len(maps["checked"].landmarks) == len(maps["unchecked"].landmarks) - 1
     assert scores["checked"].rate >= 0.8 and scores["checked"].mean < scores["unchecked"].mean

@@ -57,7 +57,7 @@ from .datasets import TRUTH_FOLDER, Dataset, default_pairs, discover_dataset, po
 from .plots import write_plots
 from .records import DENSE, record_kind
 from .report import clock, save_json, write_outputs
-from .settings import BenchSettings
+from .settings import BenchSettings, comparable
 from .work import class_mirror, pair_task, shape_task, validate_mirror
 
 WRITE_INTERVAL = 2.0  # seconds between rewrites of the summaries while pairs finish
@@ -281,13 +281,11 @@ def _open_run(out: Path, dataset: Dataset, settings: BenchSettings, resume: bool
         if before is not None and info.get("dataset") != str(dataset.root.resolve()):
             raise DarcyanError(f"{out}: the results there were made on another dataset ({info.get('dataset')}); "
                                f"use another --out, or run without --resume to start again")
-        now = json.loads(json.dumps(settings.as_dict()))
+        now = json.loads(json.dumps(settings.as_dict()))  # as run.json keeps it (lists, not tuples)
         # A setting the earlier run did not have (a darcyan before it) counts as different: its
         # results were made without it, whatever its default does now.
-        changed = [] if before is None else _differences(
-            {k: v for k, v in before.items() if k not in ("methods", "dense")},
-            {k: v for k, v in now.items() if k not in ("methods", "dense")})
-        if before is not None and (changed or _comparable(before) != settings.comparable()):
+        changed = [] if before is None else _differences(comparable(before), comparable(now))
+        if changed:
             raise DarcyanError(f"{out}: the results there were made with other settings ({_listed(changed)}); "
                                f"use another --out, or run without --resume to start again")
         earlier_dense = (before or {}).get("dense")
@@ -346,15 +344,6 @@ def _listed(names: list, most: int = 4) -> str:
         return "settings"
     more = f" and {len(names) - most} more" if len(names) > most else ""
     return ", ".join(names[:most]) + more
-
-
-def _comparable(stored: dict) -> dict | None:
-    """The comparable settings of an earlier run (``None`` when they no longer make a config)."""
-    try:
-        return BenchSettings(tuple(stored["methods"]), stored["threshold"], DarcyanConfig(**stored["config"]),
-                             stored["laplacian"], stored["repair"]).comparable()
-    except (KeyError, TypeError, DarcyanError):
-        return None
 
 
 def _load_info(out: Path) -> dict:

@@ -54,9 +54,13 @@ class BenchSettings:
                               "pyfm": dataclasses.asdict(pyfm.README_PIPELINE)}}
 
     def comparable(self) -> dict:
-        """The settings that must match for resumed results to be reused (not the method list;
-        the dense settings are compared apart, when both runs have them)."""
-        d = self.as_dict()
-        d.pop("methods")
-        d.pop("dense")
-        return d
+        """The settings that must match for resumed results to be reused (:func:`comparable`
+        of :meth:`as_dict`)."""
+        return comparable(self.as_dict())
+
+
+def comparable(settings: dict) -> dict:
+    """Of a run's settings as :meth:`BenchSettings.as_dict` gives them (or ``run.json`` keeps
+    them), those that must match for resumed results to be reused: not the method list, and not
+    the dense settings, compared apart when both runs have them."""
+    return {key: value for key, value in settings.items() if key not in ("methods", "dense")}

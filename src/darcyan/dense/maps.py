@@ -163,7 +163,6 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             pairs = (seed.source, seed.target)
             choice = dataclasses.replace(choice, seed=seed)
             scored = False  # its signature is not yet scored: the rival start scores it
-        del mended
     in_doubt = doubted and check.start == "matches" and config.start_in_doubt
     if in_doubt:
         # The map from the matches is in doubt: the start without landmarks competes with its seed.

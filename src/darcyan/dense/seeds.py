@@ -132,11 +132,12 @@ class SeedVerdict:
         fields = dataclasses.asdict(self)
         if not self.start_from:
             del fields["start_from"]
-        for name in ("rival", "left_out"):
-            if fields[name] is None:
-                del fields[name]
-            elif name == "left_out":
-                fields[name] = list(fields[name])
+        if self.rival is None:
+            del fields["rival"]
+        if self.left_out is None:
+            del fields["left_out"]
+        else:
+            fields["left_out"] = list(self.left_out)
         return fields
 
 
@@ -383,16 +384,15 @@ def landmark_displacements(shape_1, shape_2, seed: Seed, config: DenseConfig, sa
     if count < MIN_LANDMARKS + 1 or seed.fields_1 is None:
         return None
     scoring = _SeedScoring(shape_1, shape_2, config, samples, bases)
-    (p_1, p_2) = scoring.points
+    p_1, p_2 = scoring.points
+    fields_1, turns_1, fields_2, turns_2 = seed.fields_1[p_1], seed.turns_1[p_1], seed.fields_2[p_2], seed.turns_2[p_2]
     out = np.empty(count)
     for i in range(count):
         others = np.delete(np.arange(count), i)
-        coords_1, coords_2 = (_coordinates(fields[p], turns[p], others, config)
-                              for fields, turns, p in ((seed.fields_1, seed.turns_1, p_1),
-                                                       (seed.fields_2, seed.turns_2, p_2)))
-        map_12 = scoring.short_map(coords_1, coords_2, sampled=True)
-        nearest = int(np.argmin(seed.fields_1[p_1, i]))  # the scoring point nearest the source landmark
-        out[i] = seed.fields_2[p_2[map_12[nearest]], i]
+        map_12 = scoring.short_map(_coordinates(fields_1, turns_1, others, config),
+                                   _coordinates(fields_2, turns_2, others, config), sampled=True)
+        nearest = int(np.argmin(fields_1[:, i]))  # the scoring point nearest the source landmark
+        out[i] = fields_2[map_12[nearest], i]
     return out
 
 
