@@ -461,7 +461,7 @@ class DenseConfig:
             the orientation alone) (``SeedVerdict.left_out``; one pair, once; 0: never). A wrong
             pair whose distances to the others are right by symmetry (a front paw sent to the
             other) survives the consistency test and ruins its region; right pairs mostly stay
-            within 0.25 of their targets, but a short map that lost a limb sends one farther,
+            within 0.2 of their targets, but a short map that lost a limb sends one farther,
             hence the two judges (``docs/decisions/every-pair.md``).
         alignment_slack: a vertex keeps ZoomOut's image where the aligned image's geodesic
             distances to the landmarks differ from the vertex's own by more than this (sqrt(area)

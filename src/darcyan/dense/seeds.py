@@ -376,7 +376,7 @@ def landmark_displacements(shape_1, shape_2, seed: Seed, config: DenseConfig, sa
     :class:`_SeedScoring` maps them). A wrong pair the consistency test kept (a front paw sent
     to the other, whose distances to the remaining landmarks are alike by symmetry) is sent far
     from its target by the others; a right one stays near it, but for a thin part no other
-    landmark holds in place (a tail tip: up to 0.25 on tosca-5k's dogs), or one whose short map
+    landmark holds in place (a tail tip: up to 0.19 on tosca-5k's dogs), or one whose short map
     lost it (measured with ``benchmarks/landmark_check.py``: ``docs/decisions/every-pair.md``).
     ``None`` for a seed of fewer than ``MIN_LANDMARKS + 1`` pairs. Costs one short ZoomOut per
     pair (the coordinates are the seed's own columns)."""
