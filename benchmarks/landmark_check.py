@@ -30,6 +30,16 @@ def main(argv=None) -> int:
     parser.add_argument("--pairs", type=Path, required=True, help="a file of 'source<TAB>target[<TAB>group]' lines")
     parser.add_argument("--repair", action="store_true")
     args = parser.parse_args(argv)
+    from darcyan.errors import DarcyanError
+
+    try:
+        return _check(args)
+    except DarcyanError as exc:  # a bad dataset, pair list or mesh: one line, no traceback
+        print(f"landmark_check: error: {exc}", file=sys.stderr)
+        return 2
+
+
+def _check(args) -> int:
 
     import darcyan
     from darcyan.bench.datasets import discover_dataset, read_pairs
