@@ -1,5 +1,7 @@
 """How long the dense basis's eigensolve takes with ARPACK's Lanczos basis of different sizes
-(``ncv``): the measurement behind "tried and left out" in ``docs/decisions/speed.md``.
+(``ncv``) and each shift-invert step solved by eigsh's own LU factorization or by the sparse
+Cholesky factorization darcyan gives it: the measurement behind ``DenseConfig.basis_lanczos``
+and the Cholesky solves in ``docs/decisions/speed.md``.
 
     python benchmarks/eigsh_basis.py                       # a few meshes of faust-5k and tosca-5k
     python benchmarks/eigsh_basis.py A.off B.off --k 130 --repeat 3
@@ -7,7 +9,8 @@
 Each mesh is prepared as darcyan prepares it; the k smallest eigenpairs of its cotangent
 Laplacian are solved as :func:`darcyan.geometry.spectral.laplace_beltrami_spectrum` solves them
 (shift-invert about the dense basis's shift, the dense basis's tolerance, the fixed start), once
-per ``ncv``; the table prints the best of ``--repeat`` runs per mesh and the sums.
+per way (the factorization's time included); the table prints the best of ``--repeat`` runs per
+mesh and the sums.
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ def main(argv: list | None = None) -> int:
     from darcyan.dense.zoomout import EIGSH_SHIFT, fit_width
     from darcyan.errors import DarcyanError
     from darcyan.geometry.shape import prepare_shape
-    from darcyan.geometry.spectral import START_SEED, laplacian_operators
+    from darcyan.geometry.spectral import START_SEED, laplacian_operators, shifted_inverse
     from darcyan.io.mesh_files import load_mesh
 
     paths = args.meshes or [str(DATA / f) for f in ("faust-5k/tr_reg_000.off", "faust-5k/tr_reg_001.off",
@@ -45,7 +48,9 @@ def main(argv: list | None = None) -> int:
         print(f"eigsh_basis.py: error: {exc}", file=sys.stderr)
         return 2
     k = args.k or fit_width(DenseConfig().basis_size, DenseConfig())
-    choices = {"2k+1 (ARPACK's default)": None, "1.5k": int(1.5 * k), "1.25k": int(1.25 * k)}
+    lanczos = int(DenseConfig().basis_lanczos * k)
+    choices = {"LU, 2k+1 (eigsh's defaults)": (False, None), f"LU, {lanczos}": (False, lanczos),
+               "Cholesky, 2k+1": (True, None), f"Cholesky, {lanczos} (darcyan's)": (True, lanczos)}
     sums = dict.fromkeys(choices, 0.0)
     print("| mesh | vertices | " + " | ".join(choices) + " |")
     print("| --- | ---: |" + " ---: |" * len(choices))
@@ -55,12 +60,13 @@ def main(argv: list | None = None) -> int:
         mass_matrix = sp.diags(mass).tocsc()
         start = np.random.default_rng(START_SEED).uniform(-1.0, 1.0, mesh.n_vertices)
         row = []
-        for name, ncv in choices.items():
+        for name, (cholesky, ncv) in choices.items():
             best = np.inf
             for _ in range(args.repeat):
                 t = time.perf_counter()
+                inverse = shifted_inverse(stiffness, mass, EIGSH_SHIFT) if cholesky else None
                 eigsh(stiffness, k=min(k, mesh.n_vertices - 2), M=mass_matrix, sigma=EIGSH_SHIFT, which="LM",
-                      tol=DenseConfig().basis_tolerance, v0=start, ncv=ncv)
+                      tol=DenseConfig().basis_tolerance, v0=start, ncv=ncv, OPinv=inverse)
                 best = min(best, time.perf_counter() - t)
             sums[name] += best
             row.append(f"{best:.3f} s")

@@ -331,3 +331,32 @@ def test_farthest_seed_points_are_spread_when_zoomout_runs_on_every_vertex(figur
     sampled = DenseConfig(sampling="farthest", zoomout_samples=1000)
     first = zoomout_samples(shape, shape, sampled)[0]
     assert np.array_equal(seed_subset(shape, first, 300, sampled), first[:300])
+
+
+def test_zoomouts_two_directions_side_by_side_give_the_same_bits_as_one_after_the_other(figure_poses, monkeypatch):
+    # Each direction's search runs alone in its thread beside the other's (darcyan.parallel.side_by_side);
+    # with one thread they run in turn, each split into the same blocks: the same functional maps.
+    import darcyan.parallel as parallel
+    from darcyan.dense.zoomout import zoomout
+    from darcyan.geometry.shape import prepare_shape
+
+    shape_1, shape_2 = prepare_shape(figure_poses[0]), prepare_shape(figure_poses[1])
+    config = DenseConfig(basis_start=6, basis_size=20, basis_step=2, basis_margin=4, margin_from=10,
+                         landmark_weight=0, signature_weight=0, signature_turns=0)
+    rng = np.random.default_rng(3)
+    sample_1, sample_2 = (rng.choice(s.n_vertices, 600, replace=False) for s in (shape_1, shape_2))
+    basis_1, basis_2 = shape_1.spectrum(24).vectors[sample_1], shape_2.spectrum(24).vectors[sample_2]
+    start_12, start_21 = rng.integers(0, 600, 600), rng.integers(0, 600, 600)
+    searched = []
+    real_side_by_side = parallel.side_by_side
+    monkeypatch.setattr("darcyan.dense.zoomout.side_by_side",
+                        lambda tasks: searched.append(parallel.own_threads()) or real_side_by_side(tasks))
+    threads = parallel.own_threads()
+    if threads < 2:
+        pytest.skip("one core: nothing runs side by side")
+    together = zoomout(basis_1, basis_2, start_12, start_21, config)
+    monkeypatch.setattr(parallel, "MAX_OWN_THREADS", 1)
+    in_turn = zoomout(basis_1, basis_2, start_12, start_21, config)
+    assert max(searched) == threads and min(searched) == 1  # both ways were run
+    for a, b in zip(together, in_turn):
+        np.testing.assert_array_equal(a, b)

@@ -122,3 +122,24 @@ def test_own_threads_split_searches_into_the_same_blocks():
         set_threads(None)
     exact = ((queries[:, None, :] - reference[None]) ** 2).sum(axis=2).argmin(axis=1)
     assert np.array_equal(threaded, serial) and (threaded == exact).mean() > 0.99
+
+
+def test_side_by_side_runs_its_tasks_at_once_in_order_each_with_its_loops_alone():
+    import threading
+
+    from darcyan.parallel import own_threads, set_threads, side_by_side
+
+    def where():
+        return threading.get_ident(), own_threads()
+
+    threads = own_threads()
+    seen = side_by_side([where, where, lambda: "third"])
+    assert seen[2] == "third" and [inner for _, inner in seen[:2]] == [1, 1]
+    assert (seen[0][0] != seen[1][0]) == (threads > 1) and own_threads() == threads  # restored
+    nested = side_by_side([lambda: side_by_side([where, where]), lambda: None])[0]
+    assert nested[0] == nested[1] and nested[0][1] == 1  # inside a task: in turn, in its thread
+    try:
+        set_threads(2)  # BLAS threads: one task after the other, here
+        assert {ident for ident, _ in side_by_side([where, where])} == {threading.get_ident()}
+    finally:
+        set_threads(None)

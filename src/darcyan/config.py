@@ -350,6 +350,10 @@ class DenseConfig:
         basis_tolerance: relative accuracy of the eigenvalues asked of the eigensolver (its
             start vector is seeded): 1e-3 gives the vectors of machine precision in half the
             time (``docs/decisions/dense.md``).
+        basis_lanczos: Lanczos vectors the eigensolver keeps per eigenpair asked (ARPACK's
+            ``ncv``; 0: its default, 2 k + 1): fewer make each restart cheaper and need more
+            restarts; 1.5 took a third less time than the default on the 5k meshes
+            (``docs/decisions/speed.md``).
         basis_proxy_vertices: the basis of a mesh with more than twice this many vertices is
             computed on a decimated copy of about this many and interpolated
             (:meth:`darcyan.geometry.shape.Shape.smooth_basis`); 0: always on the mesh itself.
@@ -488,6 +492,7 @@ class DenseConfig:
     orientation_weight: float = 1.0
     basis_proxy_vertices: int = 6000
     basis_tolerance: float = 1e-3
+    basis_lanczos: float = 1.5
     candidates: int = 4
     seed_statistic: str = "median"
     seed_basis: int = 30
@@ -559,7 +564,7 @@ class DenseConfig:
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
                      "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns",
                      "commutativity", "alignment_normal_weight", "alignment_slack", "landmark_tie_weight",
-                     "trust_residual", "landmark_contradiction"):
+                     "trust_residual", "landmark_contradiction", "basis_lanczos"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0
                     and math.isfinite(value)):

@@ -19,12 +19,13 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from ..geometry.knn import nearest_rows, nearest_rows_near
 from ..geometry.sampling import farthest_point_vertices, sample_vertices
-from ..parallel import own_threads
+from ..parallel import own_threads, side_by_side
 from .config import DenseConfig
 
 # Shift of the shift-invert eigen solver (just below the zero eigenvalue of the Laplacian).
@@ -92,7 +93,7 @@ def dense_spectrum(shape, config: DenseConfig):
     large mesh, see ``DenseConfig.basis_proxy_vertices``)."""
     size = fit_width(config.basis_size, config)
     return shape.smooth_spectrum(min(size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
-                                 tol=config.basis_tolerance, shift=EIGSH_SHIFT)
+                                 tol=config.basis_tolerance, shift=EIGSH_SHIFT, lanczos=config.basis_lanczos)
 
 
 def dense_basis(shape, config: DenseConfig) -> np.ndarray:
@@ -309,9 +310,16 @@ def zoomout(basis_1: np.ndarray, basis_2: np.ndarray, map_12: np.ndarray, map_21
         if i < len(sizes) - 1:
             g_1, g_2 = (coarse_1, coarse_2) if k <= config.signature_until else (None, None)
             g_1, g_2 = _joined(g_1, steady_1), _joined(g_2, steady_2)
-            map_12 = map_embeddings(b1, b2, c_12, c_21, config, coords_1, coords_2, g_1, g_2).nearest()
-            map_21 = map_embeddings(b2, b1, c_21, c_12, config, coords_2, coords_1, g_2, g_1).nearest()
+            # the two directions side by side: each search alone is too small to split well
+            map_12, map_21 = side_by_side([
+                partial(_nearest_map, b1, b2, c_12, c_21, config, coords_1, coords_2, g_1, g_2),
+                partial(_nearest_map, b2, b1, c_21, c_12, config, coords_2, coords_1, g_2, g_1)])
     return c_12, c_21
+
+
+def _nearest_map(*embedding) -> np.ndarray:
+    """The vertex map of :func:`map_embeddings` ``(*embedding)``."""
+    return map_embeddings(*embedding).nearest()
 
 
 def _joined(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:

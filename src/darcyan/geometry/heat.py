@@ -49,25 +49,32 @@ def heat_kernel_diagonal(mesh: Mesh, length: float, heat: HeatKernel = HeatKerne
 
 
 def curvature_signature(mesh, mean_curvature: np.ndarray, lengths=MirrorTest().signature_lengths,
-                        diffusion_steps: int = HeatKernel().diffusion_steps) -> np.ndarray:
+                        diffusion_steps: int = HeatKernel().diffusion_steps, known: dict | None = None) -> np.ndarray:
     """``(n, len(lengths))`` mean curvature diffused over each of ``lengths``, each scaled to mean
     magnitude 1: a cheap, intrinsic, mirror-blind signature that differs between the front and
-    the back of a torso or a limb."""
+    the back of a torso or a limb. ``known``: columns already made for this mesh, curvature and
+    steps, by length; those missing are made and added to it."""
     from .operators import cotangent_laplacian
 
-    area, laplacian = mixed_voronoi_area(mesh), cotangent_laplacian(mesh)  # once for every length
-    columns = []
-    for length in lengths:
-        c = heat_diffuse(mesh, mean_curvature, length, area, diffusion_steps, laplacian)
-        columns.append(c / max(float(np.abs(c).mean()), 1e-12))
-    return np.stack(columns, axis=1)
+    known = {} if known is None else known
+    missing = [length for length in lengths if length not in known]
+    if missing:
+        area, laplacian = mixed_voronoi_area(mesh), cotangent_laplacian(mesh)  # once for every length
+        for length in missing:
+            c = heat_diffuse(mesh, mean_curvature, length, area, diffusion_steps, laplacian)
+            known[length] = c / max(float(np.abs(c).mean()), 1e-12)
+    return np.stack([known[length] for length in lengths], axis=1)
 
 
 def shape_signature(shape, proxy, lengths, steps: int, smoothing: int) -> np.ndarray:
     """``(n, len(lengths))`` :func:`curvature_signature` of a prepared shape (Meyer curvatures
     after ``smoothing`` averagings, ``steps`` diffusion steps), on its coarse ``proxy`` when there
-    is one (read back at every vertex), else on the mesh itself."""
+    is one (read back at every vertex), else on the mesh itself. Each length's column is made
+    once per shape: the mirror test's signature and a dense map's share two of their lengths."""
+    # the proxy is the shape's own (Shape.proxy), so its size names it
+    known = shape.derived(("diffused mean curvature", 0 if proxy is None else proxy.mesh.n_vertices, smoothing, steps),
+                          dict)
     if proxy is None:
-        return curvature_signature(shape.mesh, shape.curvatures(smoothing).mean, lengths, steps)
-    coarse_mean = principal_curvatures(proxy.mesh, smoothing=smoothing).mean
-    return proxy.to_full(curvature_signature(proxy.mesh, coarse_mean, lengths, steps))
+        return curvature_signature(shape.mesh, shape.curvatures(smoothing).mean, lengths, steps, known)
+    coarse_mean = None if set(lengths) <= known.keys() else principal_curvatures(proxy.mesh, smoothing=smoothing).mean
+    return proxy.to_full(curvature_signature(proxy.mesh, coarse_mean, lengths, steps, known))

@@ -1,0 +1,70 @@
+"""The Laplace-Beltrami spectrum (darcyan.geometry.spectral) against a sphere's, whichever way its
+shift-invert steps are solved, and the curvature signature's columns (darcyan.geometry.heat) made
+once per shape."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from darcyan.geometry import heat, spectral, synthetic
+from darcyan.geometry.mesh import Mesh, normalize_mesh
+from darcyan.geometry.shape import prepare_shape
+
+# On a sphere of area 1 (radius 1/sqrt(4 pi)) the eigenvalues are l (l + 1) 4 pi, multiplicity 2 l + 1.
+SPHERE_VALUES = np.repeat([degree * (degree + 1) * 4 * np.pi for degree in range(4)], [2 * degree + 1 for degree in range(4)])
+K = len(SPHERE_VALUES)
+
+
+@pytest.fixture(scope="module")
+def unit_sphere():
+    """An icosphere with its vertices moved a little along the sphere: an icosahedron's symmetry
+    makes some eigenvalues exactly equal, and one Lanczos start vector can miss one of those."""
+    mesh = synthetic.icosphere(subdivisions=4)  # radius 1, edges about 0.08 long
+    moved = mesh.vertices + 0.01 * np.random.default_rng(0).standard_normal(mesh.vertices.shape)
+    moved /= np.linalg.norm(moved, axis=1, keepdims=True)
+    return normalize_mesh(Mesh(moved, mesh.faces, name="moved icosphere"))[0]
+
+
+@pytest.mark.parametrize("lanczos", [0.0, 1.5])
+@pytest.mark.parametrize("shift", [spectral.SHIFT, -1e-8, 0.5])  # 0.5: not positive definite, LU
+def test_the_spectrum_is_the_spheres_whatever_the_factorization_and_lanczos_vectors(unit_sphere, shift, lanczos):
+    spectrum = spectral.laplace_beltrami_spectrum(unit_sphere, k=K, tol=1e-6, shift=shift, lanczos=lanczos)
+    assert abs(spectrum.values[0]) < 1e-6
+    np.testing.assert_allclose(spectrum.values[1:], SPHERE_VALUES[1:], rtol=0.02)
+    gram = spectrum.vectors.T @ (spectrum.mass[:, None] * spectrum.vectors)
+    np.testing.assert_allclose(gram, np.eye(K), atol=1e-6)
+
+
+def test_the_cholesky_and_lu_spectra_span_the_same_eigenspaces(unit_sphere):
+    by_cholesky = spectral.laplace_beltrami_spectrum(unit_sphere, k=K, tol=1e-8, shift=-1e-3)
+    by_lu = spectral.laplace_beltrami_spectrum(unit_sphere, k=K, tol=1e-8, shift=1e-3)  # eigsh's own LU
+    np.testing.assert_allclose(by_cholesky.values, by_lu.values, rtol=1e-8, atol=1e-8)
+    overlap = by_cholesky.vectors.T @ (by_cholesky.mass[:, None] * by_lu.vectors)
+    np.testing.assert_allclose(np.linalg.svd(overlap, compute_uv=False), 1.0, atol=1e-6)
+
+
+def test_the_shifted_inverse_solves_its_system_and_declines_what_is_not_positive_definite(unit_sphere):
+    stiffness, mass = spectral.laplacian_operators(unit_sphere)
+    b = np.random.default_rng(0).standard_normal(len(mass))
+    inverse = spectral.shifted_inverse(stiffness, mass, -1e-3)
+    x = inverse.matvec(b)
+    np.testing.assert_allclose((stiffness + 1e-3 * sp.diags(mass)) @ x, b, atol=1e-8 * np.abs(b).max())
+    assert spectral.shifted_inverse(stiffness, mass, 0.0) is None  # singular: the constant vector
+    assert spectral.shifted_inverse(stiffness, mass, 2.0) is None
+    indefinite = sp.csr_matrix(np.array([[1.0, 2.0], [2.0, 1.0]]))
+    assert spectral.shifted_inverse(indefinite, np.ones(2), -1e-3) is None
+
+
+def test_the_signatures_columns_are_made_once_per_shape_and_length(figure_poses, monkeypatch):
+    shape = prepare_shape(figure_poses[0])
+    mirror, dense = (0.05, 0.1, 0.2), (0.02, 0.05, 0.1)
+    alone = [heat.curvature_signature(shape.mesh, shape.curvatures(1).mean, lengths, 4) for lengths in (mirror, dense)]
+    diffused = []
+    original = heat.heat_diffuse
+    monkeypatch.setattr(heat, "heat_diffuse", lambda *a, **k: diffused.append(a[2]) or original(*a, **k))
+    shared = [heat.shape_signature(shape, None, lengths, 4, 1) for lengths in (mirror, dense)]
+    assert sorted(diffused) == [0.02, 0.05, 0.1, 0.2]  # 0.05 and 0.1 once for both
+    for one, other in zip(alone, shared):
+        np.testing.assert_array_equal(one, other)
+    heat.shape_signature(shape, None, dense, 8, 1)  # other steps: other columns
+    assert len(diffused) == 7
