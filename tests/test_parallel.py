@@ -107,7 +107,7 @@ def test_own_threads_split_searches_into_the_same_blocks():
     as one thread; with BLAS threads other than 1 they are one (no oversubscription)."""
     import numpy as np
 
-    from darcyan.geometry.knn import nearest_rows
+    from darcyan.geometry.knn import THREADED_SEARCH_MIN, nearest_points, nearest_rows
     from darcyan.parallel import map_blocks, own_threads, set_threads
 
     assert map_blocks(lambda x: x * x, list(range(10))) == [x * x for x in range(10)]
@@ -122,6 +122,17 @@ def test_own_threads_split_searches_into_the_same_blocks():
         set_threads(None)
     exact = ((queries[:, None, :] - reference[None]) ** 2).sum(axis=2).argmin(axis=1)
     assert np.array_equal(threaded, serial) and (threaded == exact).mean() > 0.99
+    # numpy's exact search, by blocks too when large enough to be worth the threads
+    few, few_queries = rng.standard_normal((2500, 3)), rng.standard_normal((2000, 3))
+    assert len(few) * len(few_queries) >= THREADED_SEARCH_MIN
+    threaded = nearest_points(few, few_queries)
+    try:
+        set_threads(2)
+        serial = nearest_points(few, few_queries)
+    finally:
+        set_threads(None)
+    exact = ((few_queries[:200, None, :] - few[None]) ** 2).sum(axis=2).argmin(axis=1)
+    assert np.array_equal(threaded, serial) and np.array_equal(threaded[:200], exact)
 
 
 def test_side_by_side_runs_its_tasks_at_once_in_order_each_with_its_loops_alone():
@@ -143,3 +154,43 @@ def test_side_by_side_runs_its_tasks_at_once_in_order_each_with_its_loops_alone(
         assert {ident for ident, _ in side_by_side([where, where])} == {threading.get_ident()}
     finally:
         set_threads(None)
+
+
+def test_side_by_side_raises_a_tasks_error_after_every_task_has_ended():
+    import threading
+    import time
+
+    from darcyan.parallel import own_threads, side_by_side
+
+    if own_threads() < 2:
+        pytest.skip("one core: the tasks run in turn")
+    ended = threading.Event()
+
+    def slow():
+        time.sleep(0.2)
+        ended.set()
+
+    def fails():
+        raise ValueError("task failed")
+
+    with pytest.raises(ValueError, match="task failed"):
+        side_by_side([fails, slow])
+    assert ended.is_set()
+
+
+def test_work_on_the_pools_threads_never_waits_on_the_pool():
+    # A block of map_blocks that splits its own work (side_by_side, map_blocks) runs it in its
+    # thread: with every pool thread waiting on the pool there would be none left to run it.
+    import threading
+
+    from darcyan.parallel import map_blocks, own_threads, side_by_side
+
+    if own_threads() < 2:
+        pytest.skip("one core: no pool")
+
+    def block(i):
+        inner = side_by_side([threading.get_ident, threading.get_ident])
+        nested = map_blocks(lambda j: threading.get_ident(), [0, 1, 2])
+        return {*inner, *nested} == {threading.get_ident()} and own_threads() == 1
+
+    assert all(map_blocks(block, list(range(8))))

@@ -5,6 +5,7 @@ once per shape."""
 import numpy as np
 import pytest
 import scipy.sparse as sp
+import scipy.sparse.linalg
 
 from darcyan.geometry import heat, spectral, synthetic
 from darcyan.geometry.mesh import Mesh, normalize_mesh
@@ -26,9 +27,22 @@ def unit_sphere():
 
 
 @pytest.mark.parametrize("lanczos", [0.0, 1.5])
-@pytest.mark.parametrize("shift", [spectral.SHIFT, -1e-8, 0.5])  # 0.5: not positive definite, LU
-def test_the_spectrum_is_the_spheres_whatever_the_factorization_and_lanczos_vectors(unit_sphere, shift, lanczos):
-    spectrum = spectral.laplace_beltrami_spectrum(unit_sphere, k=K, tol=1e-6, shift=shift, lanczos=lanczos)
+@pytest.mark.parametrize("cholesky, shift", [(False, spectral.SHIFT), (True, spectral.SHIFT), (True, -1e-8),
+                                             (True, 0.5)])  # 0.5: not positive definite, LU after all
+def test_the_spectrum_is_the_spheres_whatever_the_factorization_and_lanczos_vectors(unit_sphere, cholesky, shift,
+                                                                                      lanczos, monkeypatch):
+    asked = {}
+    real_eigsh = scipy.sparse.linalg.eigsh
+
+    def eigsh(*args, **kwargs):
+        asked.update(kwargs)
+        return real_eigsh(*args, **kwargs)
+
+    monkeypatch.setattr(scipy.sparse.linalg, "eigsh", eigsh)
+    spectrum = spectral.laplace_beltrami_spectrum(unit_sphere, k=K, tol=1e-6, shift=shift, lanczos=lanczos,
+                                                  cholesky=cholesky)
+    assert (asked["OPinv"] is not None) == (cholesky and shift < 0)
+    assert asked["ncv"] == (None if lanczos == 0 else int(lanczos * K))
     assert abs(spectrum.values[0]) < 1e-6
     np.testing.assert_allclose(spectrum.values[1:], SPHERE_VALUES[1:], rtol=0.02)
     gram = spectrum.vectors.T @ (spectrum.mass[:, None] * spectrum.vectors)
@@ -36,35 +50,71 @@ def test_the_spectrum_is_the_spheres_whatever_the_factorization_and_lanczos_vect
 
 
 def test_the_cholesky_and_lu_spectra_span_the_same_eigenspaces(unit_sphere):
-    by_cholesky = spectral.laplace_beltrami_spectrum(unit_sphere, k=K, tol=1e-8, shift=-1e-3)
-    by_lu = spectral.laplace_beltrami_spectrum(unit_sphere, k=K, tol=1e-8, shift=1e-3)  # eigsh's own LU
+    by_cholesky = spectral.laplace_beltrami_spectrum(unit_sphere, k=K, tol=1e-8, shift=-1e-3, cholesky=True)
+    by_lu = spectral.laplace_beltrami_spectrum(unit_sphere, k=K, tol=1e-8, shift=-1e-3)
     np.testing.assert_allclose(by_cholesky.values, by_lu.values, rtol=1e-8, atol=1e-8)
     overlap = by_cholesky.vectors.T @ (by_cholesky.mass[:, None] * by_lu.vectors)
     np.testing.assert_allclose(np.linalg.svd(overlap, compute_uv=False), 1.0, atol=1e-6)
 
 
-def test_the_shifted_inverse_solves_its_system_and_declines_what_is_not_positive_definite(unit_sphere):
+def test_a_failed_cholesky_factorization_falls_back_to_lu_silently(unit_sphere, monkeypatch, capfd):
+    import cholespy
+
+    def refuses(*args):
+        raise ValueError("Matrix is not positive definite!")
+
+    monkeypatch.setattr(cholespy, "CholeskySolverD", refuses)
+    spectrum = spectral.laplace_beltrami_spectrum(unit_sphere, k=K, tol=1e-6, shift=-1e-3, cholesky=True)
+    np.testing.assert_allclose(spectrum.values[1:], SPHERE_VALUES[1:], rtol=0.02)
+    assert capfd.readouterr().out == ""
+
+
+def test_the_shifted_inverse_solves_its_system_and_declines_what_is_not_positive_definite(unit_sphere, capfd):
     stiffness, mass = spectral.laplacian_operators(unit_sphere)
     b = np.random.default_rng(0).standard_normal(len(mass))
     inverse = spectral.shifted_inverse(stiffness, mass, -1e-3)
-    x = inverse.matvec(b)
-    np.testing.assert_allclose((stiffness + 1e-3 * sp.diags(mass)) @ x, b, atol=1e-8 * np.abs(b).max())
+    for rhs in (b, b[:, None]):  # eigsh hands a vector or a column
+        x = inverse.matvec(rhs).ravel()
+        np.testing.assert_allclose((stiffness + 1e-3 * sp.diags(mass)) @ x, b, atol=1e-8 * np.abs(b).max())
     assert spectral.shifted_inverse(stiffness, mass, 0.0) is None  # singular: the constant vector
     assert spectral.shifted_inverse(stiffness, mass, 2.0) is None
+    print("before", flush=True)
     indefinite = sp.csr_matrix(np.array([[1.0, 2.0], [2.0, 1.0]]))
     assert spectral.shifted_inverse(indefinite, np.ones(2), -1e-3) is None
+    print("after", flush=True)
+    assert capfd.readouterr().out == "before\nafter\n"  # CHOLMOD's warning kept off the standard output
+
+
+def test_the_dense_basis_is_solved_by_cholesky_with_its_lanczos_vectors(figure_poses, monkeypatch):
+    from darcyan.dense.config import DenseConfig
+    from darcyan.dense.zoomout import dense_spectrum
+
+    asked = []
+    real = spectral.laplace_beltrami_spectrum
+    monkeypatch.setattr("darcyan.geometry.shape.laplace_beltrami_spectrum",
+                        lambda *a, **k: asked.append((a, k)) or real(*a, **k))
+    config = DenseConfig(basis_size=20, basis_margin=4, basis_lanczos=1.75)
+    dense_spectrum(prepare_shape(figure_poses[0]), config)
+    (args, kwargs), = asked
+    assert args[-2:] == (1.75, True)  # lanczos, cholesky
 
 
 def test_the_signatures_columns_are_made_once_per_shape_and_length(figure_poses, monkeypatch):
-    shape = prepare_shape(figure_poses[0])
+    shape = prepare_shape(figure_poses[0])  # 10k vertices: with proxies of 2,000, on a proxy
     mirror, dense = (0.05, 0.1, 0.2), (0.02, 0.05, 0.1)
     alone = [heat.curvature_signature(shape.mesh, shape.curvatures(1).mean, lengths, 4) for lengths in (mirror, dense)]
+    proxy = shape.proxy(2000)
+    on_proxy = [proxy.to_full(heat.curvature_signature(proxy.mesh, heat.principal_curvatures(proxy.mesh, 1).mean,
+                                                        lengths, 4)) for lengths in (mirror, dense)]
     diffused = []
     original = heat.heat_diffuse
-    monkeypatch.setattr(heat, "heat_diffuse", lambda *a, **k: diffused.append(a[2]) or original(*a, **k))
-    shared = [heat.shape_signature(shape, None, lengths, 4, 1) for lengths in (mirror, dense)]
-    assert sorted(diffused) == [0.02, 0.05, 0.1, 0.2]  # 0.05 and 0.1 once for both
-    for one, other in zip(alone, shared):
-        np.testing.assert_array_equal(one, other)
-    heat.shape_signature(shape, None, dense, 8, 1)  # other steps: other columns
-    assert len(diffused) == 7
+    monkeypatch.setattr(heat, "heat_diffuse", lambda *a, **k: diffused.append((len(a[0].vertices), a[2])) or
+                        original(*a, **k))
+    for proxy_vertices, expected in ((0, alone), (2000, on_proxy)):
+        shared = [heat.shape_signature(shape, proxy_vertices, lengths, 4, 1) for lengths in (mirror, dense)]
+        for one, other in zip(expected, shared):
+            np.testing.assert_array_equal(one, other)
+    n, m = shape.mesh.n_vertices, proxy.mesh.n_vertices
+    assert sorted(diffused) == sorted((size, length) for size in (n, m) for length in (0.02, 0.05, 0.1, 0.2))
+    heat.shape_signature(shape, 0, dense, 8, 1)  # other steps: other columns
+    assert len(diffused) == 11

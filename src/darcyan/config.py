@@ -351,8 +351,8 @@ class DenseConfig:
             start vector is seeded): 1e-3 gives the vectors of machine precision in half the
             time (``docs/decisions/dense.md``).
         basis_lanczos: Lanczos vectors the eigensolver keeps per eigenpair asked (ARPACK's
-            ``ncv``; 0: its default, 2 k + 1): fewer make each restart cheaper and need more
-            restarts; 1.5 took a third less time than the default on the 5k meshes
+            ``ncv``; 0: scipy's default, max(2 k + 1, 20)): fewer make each restart cheaper and
+            need more restarts; 1.5 took 12% less time than the default on six 5k meshes
             (``docs/decisions/speed.md``).
         basis_proxy_vertices: the basis of a mesh with more than twice this many vertices is
             computed on a decimated copy of about this many and interpolated

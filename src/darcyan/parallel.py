@@ -31,7 +31,7 @@ _in_worker = {"value": False}  # True in a worker process of process_map: the wo
 MAX_OWN_THREADS = 8
 _pool = {"pid": None, "threads": 0, "executor": None}
 _depth = {"count": 0, "limits": None}  # entry points running in the process; the limit they set
-_alone = threading.local()  # .value True: this thread is one of side_by_side's, its loops run in it alone
+_alone = threading.local()  # .value True: this thread runs pool work (_alone_in_thread), its loops in it alone
 
 # Set to 1 in every worker: libraries that start a thread pool later read them.
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
@@ -88,8 +88,8 @@ def _one_thread() -> None:
 def own_threads() -> int:
     """How many threads darcyan's own block-wise loops use (:func:`map_blocks`): the cores this
     process may run on (at most :data:`MAX_OWN_THREADS`), 1 inside a worker of
-    :func:`process_map`, whose workers already fill the cores, 1 inside a task of
-    :func:`side_by_side`, whose tasks do, and 1 when the BLAS threads are
+    :func:`process_map`, whose workers already fill the cores, 1 inside a block of
+    :func:`map_blocks` or a task of :func:`side_by_side`, which do, and 1 when the BLAS threads are
     not 1 (:func:`set_threads`: several BLAS threads per block would oversubscribe the cores)."""
     if _in_worker["value"] or getattr(_alone, "value", False) or get_threads() != 1:
         return 1
@@ -106,29 +106,38 @@ def map_blocks(function, blocks: list) -> list:
     threads = own_threads()
     if threads <= 1 or len(blocks) <= 1:
         return [function(block) for block in blocks]
-    return list(_thread_pool(threads).map(function, blocks))
+    return list(_thread_pool(threads).map(functools.partial(_alone_in_thread, function), blocks))
 
 
 def side_by_side(tasks: list) -> list:
     """``[task() for task in tasks]``, the tasks at once on up to :func:`own_threads` threads
     (this one and the pool's), each task's own :func:`map_blocks` loops in its thread alone:
     for independent pieces of work (a map's two directions) each too small to split well, the
-    pieces side by side instead of each split in turn. The results are the same bits either way."""
+    pieces side by side instead of each split in turn. The results are the same bits either way.
+    An error in one task is raised once every task has ended."""
+    import concurrent.futures
+
     threads = own_threads()
     if threads <= 1 or len(tasks) <= 1:
         return [task() for task in tasks]
-
-    def alone(task):
-        before = getattr(_alone, "value", False)
-        _alone.value = True
-        try:
-            return task()
-        finally:
-            _alone.value = before
-
-    others = [_thread_pool(threads).submit(alone, task) for task in tasks[1:]]
-    first = alone(tasks[0])
+    others = [_thread_pool(threads).submit(_alone_in_thread, task) for task in tasks[1:]]
+    try:
+        first = _alone_in_thread(tasks[0])
+    finally:
+        concurrent.futures.wait(others)  # none left running behind an error
     return [first, *(future.result() for future in others)]
+
+
+def _alone_in_thread(function, *args):
+    """``function(*args)`` with :func:`own_threads` 1 in this thread while it runs: work that runs
+    on the pool's threads (a block, a task of :func:`side_by_side`) never waits on the pool, which
+    could have no thread left to give."""
+    before = getattr(_alone, "value", False)
+    _alone.value = True
+    try:
+        return function(*args)
+    finally:
+        _alone.value = before
 
 
 def _thread_pool(threads: int):

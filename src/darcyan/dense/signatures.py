@@ -30,8 +30,7 @@ def point_signature(shape, config: DenseConfig) -> np.ndarray:
     steps = describe.heat.diffusion_steps if config.signature_diffusion_steps is None else config.signature_diffusion_steps
 
     def compute():
-        proxy = shape.proxy(config.basis_proxy_vertices) if config.basis_proxy_vertices > 0 else None
-        return shape_signature(shape, proxy, config.signature_lengths, steps, smoothing)
+        return shape_signature(shape, config.basis_proxy_vertices, config.signature_lengths, steps, smoothing)
 
     # once per shape: --verify and the dense map, or several dense variants, score seeds alike
     return shape.derived(("point signature", config.signature_lengths, config.basis_proxy_vertices, smoothing, steps),

@@ -66,14 +66,15 @@ def curvature_signature(mesh, mean_curvature: np.ndarray, lengths=MirrorTest().s
     return np.stack([known[length] for length in lengths], axis=1)
 
 
-def shape_signature(shape, proxy, lengths, steps: int, smoothing: int) -> np.ndarray:
+def shape_signature(shape, proxy_vertices: int, lengths, steps: int, smoothing: int) -> np.ndarray:
     """``(n, len(lengths))`` :func:`curvature_signature` of a prepared shape (Meyer curvatures
-    after ``smoothing`` averagings, ``steps`` diffusion steps), on its coarse ``proxy`` when there
-    is one (read back at every vertex), else on the mesh itself. Each length's column is made
-    once per shape: the mirror test's signature and a dense map's share two of their lengths."""
-    # the proxy is the shape's own (Shape.proxy), so its size names it
-    known = shape.derived(("diffused mean curvature", 0 if proxy is None else proxy.mesh.n_vertices, smoothing, steps),
-                          dict)
+    after ``smoothing`` averagings, ``steps`` diffusion steps), on its coarse proxy of about
+    ``proxy_vertices`` vertices (:meth:`~darcyan.geometry.shape.Shape.proxy`; read back at every
+    vertex) when it has one, else on the mesh itself (also with ``proxy_vertices`` 0). Each
+    length's column is made once per shape and proxy: the mirror test's signature and a dense
+    map's share two of their lengths."""
+    proxy = shape.proxy(proxy_vertices) if proxy_vertices > 0 else None
+    known = shape.derived(("diffused mean curvature", 0 if proxy is None else proxy_vertices, smoothing, steps), dict)
     if proxy is None:
         return curvature_signature(shape.mesh, shape.curvatures(smoothing).mean, lengths, steps, known)
     coarse_mean = None if set(lengths) <= known.keys() else principal_curvatures(proxy.mesh, smoothing=smoothing).mean

@@ -13,6 +13,8 @@
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 # Nearest rows: a k-d tree up to this dimension, blocked brute force above it (in 15 dimensions
@@ -29,6 +31,10 @@ NN_BLOCK_ROWS = 256
 # Nearest-neighbour searches in numpy, not scipy.spatial: importing that costs more (0.3 s) than
 # a cached match's whole work, and the sets here are small (800 queries, <= 10k points).
 QUERY_BLOCK = 64  # queries per block: a (64, 10k) block of distances, 5 MB, reused
+# Queries x points below which nearest_points runs in this thread: the mirror test's rounds (a few
+# hundred queries among 2,000) take less than starting the thread pool would (and its import, in a
+# cached match that needs none).
+THREADED_SEARCH_MIN = 4_000_000
 # Multiple of the float64 unit roundoff that bounds the error of the screened distances (their
 # exact bound is a few units times (d + 3)); any point within it of the minimum is measured again.
 SCREEN_SLACK = 64
@@ -40,8 +46,11 @@ def nearest_points(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
 
     Squared distances are screened as ``|p|^2 - 2 q.p`` (one matrix product per block of
     queries, about 2x a k-d tree's time here); a query whose runner-up lies within the product's
-    rounding of its minimum is settled by measuring ``|p - q|^2`` directly.
+    rounding of its minimum is settled by measuring ``|p - q|^2`` directly. The blocks of a large
+    search (``THREADED_SEARCH_MIN``) run on :func:`~darcyan.parallel.own_threads` threads.
     """
+    from ..parallel import map_blocks
+
     points = np.asarray(points, dtype=np.float64)
     queries = np.asarray(queries, dtype=np.float64)
     centre = points.mean(axis=0)  # centred, the products' rounding is smaller
@@ -50,13 +59,16 @@ def nearest_points(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
     right = np.vstack([p.T, p_sq])  # (d + 1, n): [-2 q, 1] @ right = |p|^2 - 2 q.p
     reach = float(np.sqrt(p_sq.max(initial=0.0)))
     unit = SCREEN_SLACK * (points.shape[1] + 3) * float(np.finfo(np.float64).eps)
-    block = np.empty((min(QUERY_BLOCK, len(queries)), len(points)))  # reused: no fresh pages per block
     out = np.empty(len(queries), np.int64)
-    for start in range(0, len(queries), QUERY_BLOCK):
+    scratch = threading.local()  # each thread's block of distances, reused: no fresh pages per block
+
+    def search(start: int) -> None:  # the same blocks whatever the threads: the same bits
         q = queries[start:start + QUERY_BLOCK]
+        if getattr(scratch, "block", None) is None:
+            scratch.block = np.empty((min(QUERY_BLOCK, len(queries)), len(points)))
         qc = q - centre
         rows = np.arange(len(q))
-        screened = np.matmul(np.hstack([-2.0 * qc, np.ones((len(q), 1))]), right, out=block[:len(q)])
+        screened = np.matmul(np.hstack([-2.0 * qc, np.ones((len(q), 1))]), right, out=scratch.block[:len(q)])
         best = screened.argmin(axis=1)
         low = screened[rows, best].copy()
         tolerance = unit * (np.linalg.norm(qc, axis=1) + reach) ** 2
@@ -70,6 +82,13 @@ def nearest_points(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
             order = np.lexsort((c, exact, r))  # per query: smallest distance, then smallest index
             first = order[np.r_[True, r[order][1:] != r[order][:-1]]]
             out[start + unsure[r[first]]] = c[first]
+
+    blocks = list(range(0, len(queries), QUERY_BLOCK))
+    if len(queries) * len(points) < THREADED_SEARCH_MIN:
+        for start in blocks:
+            search(start)
+    else:
+        map_blocks(search, blocks)
     return out
 
 

@@ -124,40 +124,41 @@ class Shape:
         return self._once(("curvatures", smoothing), lambda: principal_curvatures(self.mesh, smoothing))
 
     def spectrum(self, k: int, tol: float = 0.0, shift: float = SHIFT, laplacian: str = "cotangent",
-                 lanczos: float = 0.0) -> Spectrum:
+                 lanczos: float = 0.0, cholesky: bool = False) -> Spectrum:
         """The ``k`` smallest Laplace-Beltrami eigenpairs (seeded: the same bytes every run; see
         :func:`~darcyan.geometry.spectral.laplace_beltrami_spectrum`)."""
-        return self._once(("spectrum", k, tol, shift, laplacian, lanczos),
-                          lambda: laplace_beltrami_spectrum(self.mesh, k, laplacian, tol, shift, lanczos))
+        return self._once(("spectrum", k, tol, shift, laplacian, lanczos, cholesky),
+                          lambda: laplace_beltrami_spectrum(self.mesh, k, laplacian, tol, shift, lanczos, cholesky))
 
     def smooth_basis(self, k: int, proxy_vertices: int = 0, tol: float = 0.0, shift: float = SHIFT,
-                     lanczos: float = 0.0):
+                     lanczos: float = 0.0, cholesky: bool = False):
         """``(n, k)`` the ``k`` first Laplace-Beltrami eigenfunctions at the vertices. On a mesh
         with more than twice ``proxy_vertices`` vertices they are computed on its coarse
         :meth:`proxy` and interpolated (smooth functions lose nothing there; the eigensolver on
         50k vertices takes tens of seconds), and are then not mass-orthonormal, and not an
         ndarray but :class:`~darcyan.geometry.proxy.InterpolatedRows`, interpolated as rows are
         read (index it first: ``basis[rows, :k]``; ``np.asarray(basis)`` makes the whole array).
-        ``tol``: the eigensolver's relative accuracy (0: machine precision); ``lanczos``: its
-        Lanczos vectors per eigenpair (0: ARPACK's default)."""
-        return self.smooth_spectrum(k, proxy_vertices, tol, shift, lanczos).vectors
+        ``tol``: the eigensolver's relative accuracy (0: machine precision); ``lanczos``,
+        ``cholesky``: how it solves (see :func:`~darcyan.geometry.spectral.laplace_beltrami_spectrum`)."""
+        return self.smooth_spectrum(k, proxy_vertices, tol, shift, lanczos, cholesky).vectors
 
     def smooth_spectrum(self, k: int, proxy_vertices: int = 0, tol: float = 0.0, shift: float = SHIFT,
-                        lanczos: float = 0.0) -> Spectrum:
+                        lanczos: float = 0.0, cholesky: bool = False) -> Spectrum:
         """The eigenpairs behind :meth:`smooth_basis`: on a large mesh the coarse proxy's
         eigenvalues and its eigenvectors interpolated to the vertices (``mass``: the mesh's
         vertex areas; the interpolated vectors are then not mass-orthonormal, and are
         :class:`~darcyan.geometry.proxy.InterpolatedRows`: interpolated as they are read)."""
         proxy = self.proxy(proxy_vertices) if proxy_vertices > 0 else None
         if proxy is None:
-            return self.spectrum(k, tol, shift, lanczos=lanczos)
+            return self.spectrum(k, tol, shift, lanczos=lanczos, cholesky=cholesky)
 
         def interpolated():
-            coarse = self._once(("proxy spectrum", k, proxy_vertices, tol, shift, lanczos), lambda: laplace_beltrami_spectrum(
-                proxy.mesh, min(k, proxy.mesh.n_vertices - 1), tol=tol, shift=shift, lanczos=lanczos))
+            coarse = self._once(("proxy spectrum", k, proxy_vertices, tol, shift, lanczos, cholesky),
+                                lambda: laplace_beltrami_spectrum(proxy.mesh, min(k, proxy.mesh.n_vertices - 1), tol=tol,
+                                                                  shift=shift, lanczos=lanczos, cholesky=cholesky))
             return Spectrum(coarse.values, proxy.rows_on_demand(coarse.vectors), self.vertex_areas)
 
-        return self._once(("proxy basis", k, proxy_vertices, tol, shift, lanczos), interpolated)
+        return self._once(("proxy basis", k, proxy_vertices, tol, shift, lanczos, cholesky), interpolated)
 
     def proxy(self, vertices: int):
         """A :class:`~darcyan.geometry.proxy.CoarseProxy` of about ``vertices`` vertices, or

@@ -3,6 +3,9 @@
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -46,11 +49,18 @@ def laplacian_operators(mesh: Mesh, laplacian: str = "cotangent") -> tuple[sp.cs
 
 
 def laplace_beltrami_spectrum(mesh: Mesh, k: int = SPECTRUM_SIZE, laplacian: str = "cotangent",
-                              tol: float = 0.0, shift: float = SHIFT, lanczos: float = 0.0) -> Spectrum:
+                              tol: float = 0.0, shift: float = SHIFT, lanczos: float = 0.0,
+                              cholesky: bool = False) -> Spectrum:
     """The ``k`` smallest eigenpairs of ``stiffness phi = lambda mass phi`` (shift-invert ``eigsh``
     about ``shift``, relative accuracy ``tol`` of the eigenvalues; 0: machine precision), from a
     fixed start vector (seed ``START_SEED``), so the same mesh gives the same bytes every time.
-    ``lanczos``: Lanczos vectors kept per eigenpair (ARPACK's ``ncv``; 0: its default ``2 k + 1``).
+    ``lanczos``: Lanczos vectors kept per eigenpair (ARPACK's ``ncv``; 0: scipy's default,
+    ``max(2 k + 1, 20)``); ``cholesky``: each shift-invert step solved by
+    :func:`shifted_inverse` (about a third of the time of ``eigsh``'s own LU solves) instead of
+    ``eigsh``'s LU. Either gives the eigenpairs to the tolerance asked, but where eigenvalues are
+    equal (a symmetric mesh's) the rounding decides which vectors of their space come out, and
+    whether a group cut at the k-th is found whole: the describe stage's spectra keep ``eigsh``'s
+    own LU, so that its results stay those measured.
 
     Memory stays O(n k): one sparse factorization and the ``(n, k)`` eigenvectors.
     """
@@ -66,7 +76,7 @@ def laplace_beltrami_spectrum(mesh: Mesh, k: int = SPECTRUM_SIZE, laplacian: str
         start = np.random.default_rng(START_SEED).uniform(-1.0, 1.0, mesh.n_vertices)
         vectors_kept = None if lanczos <= 0 else min(mesh.n_vertices, max(int(lanczos * k), k + 2))
         values, vectors = eigsh(stiffness, k=k, M=sp.diags(mass).tocsc(), sigma=shift, which="LM", tol=tol, v0=start,
-                                ncv=vectors_kept, OPinv=shifted_inverse(stiffness, mass, shift))
+                                ncv=vectors_kept, OPinv=shifted_inverse(stiffness, mass, shift) if cholesky else None)
     except (RuntimeError, ValueError) as exc:
         raise MeshError(mesh.name, f"Laplace-Beltrami eigenproblem failed ({exc})") from None
     order = np.argsort(values)
@@ -78,8 +88,8 @@ def shifted_inverse(stiffness: sp.csr_matrix, mass: np.ndarray, shift: float):
     ``eigsh`` applies at every step, by a sparse Cholesky factorization (CHOLMOD, through
     ``cholespy``), whose solves take about a third of the time of those of the LU factorization
     ``eigsh`` makes by default (a 130-eigenpair solve does some 450). ``None`` (``eigsh`` then
-    factorizes by LU itself) when the matrix is not positive definite: a shift at or above 0, or
-    a factorization that fails."""
+    factorizes by LU itself) when the matrix is not positive definite (a shift at or above 0, or
+    a factorization that fails) or too large for CHOLMOD's 32-bit indices."""
     if shift >= 0:
         return None
     import scipy.sparse as sp
@@ -87,12 +97,15 @@ def shifted_inverse(stiffness: sp.csr_matrix, mass: np.ndarray, shift: float):
     from scipy.sparse.linalg import LinearOperator
 
     shifted = (stiffness - shift * sp.diags(mass)).tocsr()
+    if shifted.nnz >= np.iinfo(np.int32).max:
+        return None
     shifted.sort_indices()
     n = shifted.shape[0]
     try:
-        factor = CholeskySolverD(n, shifted.indptr.astype(np.int32), shifted.indices.astype(np.int32),
-                                 np.ascontiguousarray(shifted.data, dtype=np.float64), MatrixType.CSR)
-    except ValueError:  # not positive definite in floating point (a shift very near 0)
+        with _standard_output_muted():
+            factor = CholeskySolverD(n, shifted.indptr.astype(np.int32), shifted.indices.astype(np.int32),
+                                     np.ascontiguousarray(shifted.data, dtype=np.float64), MatrixType.CSR)
+    except (ValueError, RuntimeError):  # not positive definite in floating point (a shift very near 0)
         return None
 
     def solve(b: np.ndarray) -> np.ndarray:
@@ -101,3 +114,26 @@ def shifted_inverse(stiffness: sp.csr_matrix, mass: np.ndarray, shift: float):
         return x
 
     return LinearOperator((n, n), matvec=solve, dtype=np.float64)
+
+
+@contextlib.contextmanager
+def _standard_output_muted():
+    """The process's standard output (file descriptor 1) sent to the null device: CHOLMOD prints
+    its warnings there ("not positive definite", when :func:`shifted_inverse` falls back to LU),
+    where ``darcyan match`` may be writing a map. Whatever another thread prints meanwhile is
+    lost too: the factorization takes milliseconds, and darcyan prints from one thread."""
+    import ctypes
+
+    sys.stdout.flush()
+    saved, null = os.dup(1), os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        yield
+    finally:
+        try:  # C's own buffer, which would otherwise reach the real output later
+            ctypes.CDLL(None).fflush(None)
+        except (OSError, AttributeError, TypeError):  # no C library to ask (Windows): nothing buffered there
+            pass
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(null)

@@ -261,7 +261,7 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
     surface = OrientedSurface(
         normalized.vertices.astype(np.float32), shape.normals.astype(np.float32),
         np.array([distances[int(v)] for v in features.vertices], dtype=np.float32),
-        _signature(shape, proxy, config).astype(np.float32), curvatures.area.astype(np.float32),
+        _signature(shape, config).astype(np.float32), curvatures.area.astype(np.float32),
         angular_profiles(normalized, grids, curvatures, config.mirror.profile_levels).astype(np.float32))
     done("layout")
     description = ShapeDescription(
@@ -282,9 +282,9 @@ def _heat_kernel(shape: Shape, proxy, config: DarcyanConfig) -> np.ndarray:
     return proxy.to_full(heat_kernel_diagonal(proxy.mesh, config.agd_smoothing, config.heat))
 
 
-def _signature(shape: Shape, proxy, config: DarcyanConfig) -> np.ndarray:
+def _signature(shape: Shape, config: DarcyanConfig) -> np.ndarray:
     """The mirror test's point signature, on the coarse proxy when there is one."""
-    return shape_signature(shape, proxy, config.mirror.signature_lengths, config.heat.diffusion_steps,
+    return shape_signature(shape, config.proxy_vertices, config.mirror.signature_lengths, config.heat.diffusion_steps,
                            config.curvature_smoothing)
 
 
