@@ -1,0 +1,89 @@
+"""Feature matches three ways, scored against the ground truth: the sparse stage's, those
+``darcyan match --dense`` writes (read from the map only where the map was started without the
+matches or left a landmark pair out, :func:`darcyan.api.matches_of_map`), and those read from
+every map (:func:`darcyan.dense.maps.matching_of_map`, trusted maps too): whether a dense map
+should correct the sparse matching more often than it does.
+
+    python benchmarks/map_matches.py ../shared/data/faust-5k --pairs benchmarks/faust5k_test_pairs_groups.txt
+    python benchmarks/map_matches.py COPIES/isotropic --pairs PAIRS --repair --out rows.jsonl
+
+A match is right when its target lies within 0.05 sqrt(area) of the true correspondent of its
+source, scored as ``darcyan bench`` scores matches (:func:`darcyan.eval.metrics.score_matches`).
+Each pair's row is written to ``--out`` as it is done, and a run with the same ``--out`` goes on
+from there.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+WAYS = ("sparse", "written", "every map")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("dataset", type=Path, help="a folder of meshes with corres/*.vts (or one numbering)")
+    parser.add_argument("--pairs", type=Path, required=True, help="a file of 'source<TAB>target[<TAB>group]' lines")
+    parser.add_argument("--repair", action="store_true")
+    parser.add_argument("--out", type=Path, help="the pairs' rows (JSON lines), kept and resumed from")
+    args = parser.parse_args(argv)
+    from darcyan.errors import DarcyanError
+
+    try:
+        return _run(args)
+    except DarcyanError as exc:  # a bad dataset, pair list or mesh: one line, no traceback
+        print(f"map_matches: error: {exc}", file=sys.stderr)
+        return 2
+
+
+def _run(args) -> int:
+    import darcyan
+    from darcyan.bench.datasets import discover_dataset, read_pairs
+    from darcyan.dense.maps import matching_of_map
+    from darcyan.eval.metrics import DEFAULT_THRESHOLD, GroundTruth, read_vts, score_matches
+
+    dataset = discover_dataset(args.dataset)
+    pairs = read_pairs(args.pairs, dataset)
+    out = args.out or Path(tempfile.mkdtemp(prefix="map_matches-")) / "rows.jsonl"
+    rows = [json.loads(line) for line in out.read_text().splitlines()] if out.exists() else []
+    done = {(row["source"], row["target"]) for row in rows}
+    cache = darcyan.ShapeCache(Path(tempfile.gettempdir()) / "darcyan-map-matches-cache")
+    with out.open("a") as written:
+        for source, target in pairs:
+            if (source, target) in done:
+                continue
+            files = [args.dataset / f"{name}.off" for name in (source, target)]
+            sparse = darcyan.correspond(*files, repair=args.repair, cache=cache)
+            result = darcyan.correspond(*files, dense=True, repair=args.repair, cache=cache).pairs[0]
+            shape_1, shape_2 = result.shapes
+            read = matching_of_map(sparse.pairs[0].matches, result.dense, *sparse.descriptions, shape_2)
+            truth = GroundTruth.identity() if dataset.truth == "identity" else \
+                GroundTruth(read_vts(dataset.vts(source)), read_vts(dataset.vts(target)))
+            row = {"source": source, "target": target, "trusted": bool(result.dense.check.trusted)}
+            for way, matches in zip(WAYS, (sparse.pairs[0].matches, result.matches, read)):
+                errors = score_matches(shape_1, shape_2, matches, truth).errors
+                errors = errors[~np.isnan(errors)]
+                row[way] = [int((errors <= DEFAULT_THRESHOLD).sum()), len(errors)]
+            written.write(json.dumps(row) + "\n")
+            written.flush()
+            rows.append(row)
+            print(f"{source} -> {target}: " + ", ".join(f"{w} {row[w][0]}/{row[w][1]}" for w in WAYS), flush=True)
+    print(f"\nrows: {out}\n\n| maps | n | " + " | ".join(f"{w}: right / matches" for w in WAYS) + " |")
+    print("| --- | ---: |" + " ---: |" * len(WAYS))
+    for name, chosen in (("all", rows), ("trusted", [r for r in rows if r["trusted"]])):
+        cells = []
+        for way in WAYS:
+            right, n = sum(r[way][0] for r in chosen), sum(r[way][1] for r in chosen)
+            cells.append(f"{right} / {n} ({100 * right / max(n, 1):.1f}%)")
+        print(f"| {name} | {len(chosen)} | " + " | ".join(cells) + " |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
