@@ -193,4 +193,8 @@ def test_work_on_the_pools_threads_never_waits_on_the_pool():
         nested = map_blocks(lambda j: threading.get_ident(), [0, 1, 2])
         return {*inner, *nested} == {threading.get_ident()} and own_threads() == 1
 
-    assert all(map_blocks(block, list(range(8))))
+    found = []
+    runner = threading.Thread(target=lambda: found.append(all(map_blocks(block, list(range(8))))), daemon=True)
+    runner.start()
+    runner.join(timeout=30)  # a deadlock fails here instead of hanging the run
+    assert found == [True]

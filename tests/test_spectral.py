@@ -85,6 +85,20 @@ def test_the_shifted_inverse_solves_its_system_and_declines_what_is_not_positive
     assert capfd.readouterr().out == "before\nafter\n"  # CHOLMOD's warning kept off the standard output
 
 
+def test_factorizations_in_several_threads_give_the_standard_output_back(capfd):
+    import threading
+
+    indefinite = sp.csr_matrix(np.array([[1.0, 2.0], [2.0, 1.0]]))
+    threads = [threading.Thread(target=lambda: [spectral.shifted_inverse(indefinite, np.ones(2), -1e-3)
+                                                for _ in range(20)]) for _ in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    print("still here", flush=True)
+    assert capfd.readouterr().out == "still here\n"
+
+
 def test_the_dense_basis_is_solved_by_cholesky_with_its_lanczos_vectors(figure_poses, monkeypatch):
     from darcyan.dense.config import DenseConfig
     from darcyan.dense.zoomout import dense_spectrum

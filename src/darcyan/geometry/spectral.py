@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
+import threading
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -120,20 +121,60 @@ def shifted_inverse(stiffness: sp.csr_matrix, mass: np.ndarray, shift: float):
 def _standard_output_muted():
     """The process's standard output (file descriptor 1) sent to the null device: CHOLMOD prints
     its warnings there ("not positive definite", when :func:`shifted_inverse` falls back to LU),
-    where ``darcyan match`` may be writing a map. Whatever another thread prints meanwhile is
-    lost too: the factorization takes milliseconds, and darcyan prints from one thread."""
-    import ctypes
-
-    sys.stdout.flush()
-    saved, null = os.dup(1), os.open(os.devnull, os.O_WRONLY)
+    where ``darcyan match`` may be writing a map. Muted from the first caller in to the last
+    out (threads may factorize at once); what another thread prints meanwhile is lost too (a
+    factorization takes milliseconds). Best effort: with no standard output to redirect (closed,
+    or none), the block runs as it is."""
+    with _muting:
+        first = _muted["depth"] == 0
+        if first:
+            _muted["saved"] = _redirect_standard_output()
+        _muted["depth"] += 1
     try:
-        os.dup2(null, 1)
         yield
     finally:
-        try:  # C's own buffer, which would otherwise reach the real output later
-            ctypes.CDLL(None).fflush(None)
-        except (OSError, AttributeError, TypeError):  # no C library to ask (Windows): nothing buffered there
-            pass
-        os.dup2(saved, 1)
+        with _muting:
+            _muted["depth"] -= 1
+            if _muted["depth"] == 0 and _muted["saved"] is not None:
+                saved, _muted["saved"] = _muted["saved"], None
+                _flush_c_output()
+                try:
+                    os.dup2(saved, 1)
+                finally:
+                    os.close(saved)
+
+
+_muting = threading.Lock()
+_muted = {"depth": 0, "saved": None}  # callers inside, and the descriptor standard output had
+
+
+def _redirect_standard_output() -> int | None:
+    """Point file descriptor 1 at the null device; the duplicate of what it was (``None``: left
+    as it is, there being nothing to redirect)."""
+    try:
+        if sys.stdout is not None:
+            sys.stdout.flush()
+        _flush_c_output()  # what C buffered before goes where it was meant to
+        saved = os.dup(1)
+    except (OSError, ValueError):  # no descriptor 1, or a closed sys.stdout
+        return None
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(null, 1)
+        finally:
+            os.close(null)
+    except OSError:
         os.close(saved)
-        os.close(null)
+        return None
+    return saved
+
+
+def _flush_c_output() -> None:
+    """Flush C's own stdio buffers (the C library's; none to ask on Windows)."""
+    import ctypes
+
+    try:
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError, TypeError):
+        pass
