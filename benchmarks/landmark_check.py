@@ -16,31 +16,18 @@ truth has no correspondent on the prepared target.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import sys
-from pathlib import Path
 
 import numpy as np
+from pair_sets import pair_set_parser, run_reporting_errors  # benchmarks/pair_sets.py
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("dataset", type=Path, help="a folder of meshes with corres/*.vts")
-    parser.add_argument("--pairs", type=Path, required=True, help="a file of 'source<TAB>target[<TAB>group]' lines")
-    parser.add_argument("--repair", action="store_true")
-    args = parser.parse_args(argv)
-    from darcyan.errors import DarcyanError
-
-    try:
-        return _check(args)
-    except DarcyanError as exc:  # a bad dataset, pair list or mesh: one line, no traceback
-        print(f"landmark_check: error: {exc}", file=sys.stderr)
-        return 2
+    return run_reporting_errors("landmark_check", _check, pair_set_parser(__doc__).parse_args(argv))
 
 
 def _check(args) -> int:
-
     import darcyan
     from darcyan.bench.datasets import discover_dataset, read_pairs
     from darcyan.dense.config import DenseConfig

@@ -16,31 +16,21 @@ error), and a run with the same ``--out`` goes on from there.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
+from pair_sets import pair_set_parser, run_reporting_errors  # benchmarks/pair_sets.py
 
 WAYS = ("sparse", "written", "every map")
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("dataset", type=Path, help="a folder of meshes with corres/*.vts (or one numbering)")
-    parser.add_argument("--pairs", type=Path, required=True, help="a file of 'source<TAB>target[<TAB>group]' lines")
-    parser.add_argument("--repair", action="store_true")
+    parser = pair_set_parser(__doc__)
     parser.add_argument("--out", type=Path, help="the pairs' rows (JSON lines), kept and resumed from")
-    args = parser.parse_args(argv)
-    from darcyan.errors import DarcyanError
-
-    try:
-        return _run(args)
-    except DarcyanError as exc:  # a bad dataset, pair list or mesh: one line, no traceback
-        print(f"map_matches: error: {exc}", file=sys.stderr)
-        return 2
+    return run_reporting_errors("map_matches", _run, parser.parse_args(argv))
 
 
 def _run(args) -> int:

@@ -319,11 +319,11 @@ def trusted(check: MapCheck, correspondence, config: DenseConfig) -> bool:
       stage's curvature signature, would disagree;
     - a matching the sparse stage was in doubt of stood clear of its rivals in the dense stage
       (``check.verdict.clear``): then the dense stage's judgment is the only one, and it must be plain;
+    - no landmark pair was left out (``check.verdict.left_out``): a map mended so came from a
+      map in doubt, and only its own checks vouch for it;
     - the alignment's deformation could follow it: its residual (``check.residual``) is at most
       ``config.trust_residual`` (a map that needs the source mirrored or torn cannot be followed
-      as rigidly as possible; without alignment, NaN, this condition holds);
-    - no landmark pair was left out (``check.verdict.left_out``): a map mended so came from a
-      map in doubt, and only its own checks vouch for it.
+      as rigidly as possible; without alignment, NaN, this condition holds).
 
     Measured on the shared sets and the hard copies: ``docs/decisions/every-pair.md``. Which
     conditions a map fails: :func:`distrust_reasons`."""

@@ -403,10 +403,11 @@ def without_landmark(seed: Seed, i: int, config: DenseConfig) -> Seed:
     signature score 0 (not scored)."""
     others = np.delete(np.arange(len(seed.source)), i)
     pairs = _pair_columns(len(seed.source), others)
-    return Seed(seed.rank, seed.source[others], seed.target[others], seed.fields_1[:, others],
-                seed.fields_2[:, others], seed.turns_1[:, pairs], seed.turns_2[:, pairs],
-                _coordinates(seed.fields_1, seed.turns_1, others, config),
-                _coordinates(seed.fields_2, seed.turns_2, others, config), 0.0, seed.start, seed.start_from)
+    fields_1, fields_2 = seed.fields_1[:, others], seed.fields_2[:, others]
+    turns_1, turns_2 = seed.turns_1[:, pairs], seed.turns_2[:, pairs]
+    return Seed(seed.rank, seed.source[others], seed.target[others], fields_1, fields_2, turns_1, turns_2,
+                coordinates_of(fields_1, turns_1, config), coordinates_of(fields_2, turns_2, config), 0.0,
+                seed.start, seed.start_from)
 
 
 def _pair_columns(count: int, kept: np.ndarray) -> np.ndarray:
