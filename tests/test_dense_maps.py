@@ -189,11 +189,12 @@ def test_a_person_front_and_back_are_not_swapped(faust):
     # orientation check -0.5); the turns between landmarks hold it (0.97, check > 0.8), and so do
     # the turns from the landmark directions to the curvature's alone (a reflection flips both).
     shapes, correspondence, truth = faust_pair(faust, "tr_reg_023", "tr_reg_028")
-    distances_only = DenseConfig(orientation_weight=0, landmark_weight=0, signature_turns=0)
+    distances_only = DenseConfig(orientation_weight=0, landmark_weight=0, signature_turns=0, signature_turns_partial=0)
     maps = {"turns": dense_map(*shapes, correspondence),
             "distances only": dense_map(*shapes, correspondence, distances_only),
             "signature turns": dense_map(*shapes, correspondence,
-                                         dataclasses.replace(distances_only, signature_turns=2.0))}
+                                         dataclasses.replace(distances_only, signature_turns=2.0,
+                                                             signature_turns_partial=2.0))}
     scores = {name: evaluate_dense(shapes[0].mesh, shapes[1].mesh, m.target, truth, target_solver=shapes[1].solver)
               for name, m in maps.items()}
     assert scores["turns"].rate >= 0.9 and scores["turns"].mean <= 0.025

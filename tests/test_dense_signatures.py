@@ -24,6 +24,45 @@ def test_signature_turns_flip_in_a_mirror_stay_under_rigid_motion_and_scale_with
     assert np.allclose(turns["mirrored"], -turns["as is"], atol=1e-6)
     with pytest.raises(ConfigError, match="signature_turns"):
         DenseConfig(signature_turns=-1)
+    with pytest.raises(ConfigError, match="signature_turns_partial"):
+        DenseConfig(signature_turns_partial=-1)
+
+
+def test_signature_turns_are_strong_only_when_every_extremity_is_anchored():
+    """The full weight when the landmarks are at least as many as the feature points of the shape
+    with fewer (or when the counts are not known), the partial weight when one is missing."""
+    from darcyan.dense.signatures import signature_turn_weight
+
+    config = DenseConfig(signature_turns=4.0, signature_turns_partial=1.5)
+    assert signature_turn_weight(5, (5, 6), config) == 4.0  # the shape with fewer: all five anchored
+    assert signature_turn_weight(5, (6, 6), config) == 1.5  # a tail left unmatched
+    assert signature_turn_weight(3, (), config) == 4.0  # a user's own landmarks: nothing else known
+    assert signature_turn_weight(6, (5, 5), config) == 4.0  # a start without the matches may find more
+
+
+def test_a_map_with_an_unanchored_extremity_uses_the_partial_turns(figure_pair):
+    """The same landmarks between shapes said to have one feature point more than matched give the
+    map of the partial weight, and with every feature point matched the map of the full weight."""
+    import dataclasses
+
+    from conftest import FAST_DENSE
+
+    from darcyan.dense.maps import dense_map
+
+    shape_1, shape_2, matches = figure_pair
+    assert matches.feature_counts == (len(shape_1.description.feature_vertices),
+                                      len(shape_2.description.feature_vertices))
+    k = len(matches)
+    full, partial = (dataclasses.replace(FAST_DENSE, signature_turns=w, signature_turns_partial=w) for w in (4.0, 1.0))
+    mixed = dataclasses.replace(FAST_DENSE, signature_turns=4.0, signature_turns_partial=1.0)
+    anchored = dataclasses.replace(matches, feature_counts=(k, k + 1), alternatives=())
+    unanchored = dataclasses.replace(matches, feature_counts=(k + 1, k + 2), alternatives=())
+    made = {name: dense_map(shape_1, shape_2, c, config).target
+            for name, c, config in (("mixed anchored", anchored, mixed), ("mixed unanchored", unanchored, mixed),
+                                    ("full", anchored, full), ("partial", anchored, partial))}
+    assert not np.array_equal(made["full"], made["partial"])  # not vacuous: the weight changes the map
+    assert np.array_equal(made["mixed anchored"], made["full"])
+    assert np.array_equal(made["mixed unanchored"], made["partial"])
 
 
 def test_signature_coordinates_have_the_configured_spread(figure_poses):

@@ -387,6 +387,12 @@ class DenseConfig:
             chosen seed and of the final read-out (0: never). Along a limb the distances to all
             the landmarks grow alike on all its sides; the turn from that direction to the one in
             which the curvature changes differs from one side to another (``docs/decisions/dense.md``).
+            This weight holds when every feature point of the shape with fewer of them is a
+            landmark of the map (:func:`~darcyan.dense.signatures.signature_turn_weight`).
+        signature_turns_partial: the turns' weight when some feature point of the shape with fewer
+            is not a landmark (a tail whose descriptors disagree, a hand glued to a hip): with a
+            limb unanchored, strong turns let the map slide along it
+            (``docs/decisions/every-pair.md``).
         seed_margin: an alternative replaces the sparse matching only when its score is lower
             by at least this share (``DenseMap.check.verdict.clear``: no other seed scored within
             this share of the chosen one's).
@@ -502,7 +508,8 @@ class DenseConfig:
     signature_diffusion_steps: int | None = None
     signature_weight: float = 3.0
     signature_until: int = 70
-    signature_turns: float = 2.0
+    signature_turns: float = 4.0
+    signature_turns_partial: float = 2.0
     seed_margin: float = 0.04
     trust_orientation: float = 0.55
     trust_residual: float = 0.012
@@ -562,7 +569,7 @@ class DenseConfig:
         if not (isinstance(self.trust_orientation, (int, float)) and -1 <= self.trust_orientation <= 1):
             raise ConfigError(f"dense: trust_orientation must be in [-1, 1], got {self.trust_orientation!r}")
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
-                     "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns",
+                     "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns", "signature_turns_partial",
                      "commutativity", "alignment_normal_weight", "alignment_slack", "landmark_tie_weight",
                      "trust_residual", "landmark_contradiction", "basis_lanczos"):
             value = getattr(self, name)

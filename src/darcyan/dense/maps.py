@@ -43,7 +43,7 @@ from .config import DenseConfig
 from .landmarks import distance_fields
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
 from .seeds import SeedVerdict, check_of_seeds, choose_seed, contradicted_landmark, rival_start, seed_check, without_landmark
-from .signatures import point_signature, signature_coordinates, signature_turn_coordinates
+from .signatures import point_signature, signature_coordinates, signature_turn_coordinates, signature_turn_weight
 from .zoomout import consensus_map, dense_eigenvalues, dense_spectrum, read_out_map, zoomout, zoomout_samples
 
 UNMAPPED = -1  # source vertices the analysis left out (outside the largest component)
@@ -239,7 +239,8 @@ def _map_of_seed(shape_1, shape_2, seed, config: DenseConfig, choice, say, timin
         timings[stage + "pyfm"] = time.perf_counter() - t
         return local, residual
     say("zoomout")
-    local = _zoomout_map(shape_1, shape_2, seed, config, choice.samples, choice.bases)
+    turns = signature_turn_weight(len(seed.source), choice.feature_counts, config)
+    local = _zoomout_map(shape_1, shape_2, seed, config, choice.samples, choice.bases, turns)
     timings[stage + "zoomout"] = time.perf_counter() - t
     if config.alignment_rounds > 0:
         say("alignment")
@@ -259,9 +260,11 @@ def _checked(shape_1, local: np.ndarray, seed, verdict: SeedVerdict, residual: f
     return dataclasses.replace(check, trusted=not doubts, doubts=doubts)
 
 
-def _zoomout_map(shape_1, shape_2, seed, config: DenseConfig, samples: tuple, bases: tuple) -> np.ndarray:
+def _zoomout_map(shape_1, shape_2, seed, config: DenseConfig, samples: tuple, bases: tuple,
+                 turns: float) -> np.ndarray:
     """``(n1,)`` ZoomOut's map from ``seed``'s landmarks (prepared numbering), read out at every
-    source vertex; the medoid of ``config.ensemble`` runs when it asks for three or more."""
+    source vertex, with the signature turns weighed by ``turns``; the medoid of
+    ``config.ensemble`` runs when it asks for three or more."""
     (sample_1, sample_2), (basis_1, basis_2) = samples, bases
     mesh_1, mesh_2 = shape_1.mesh, shape_2.mesh
     coords_1, coords_2 = seed.coords_1, seed.coords_2
@@ -270,7 +273,7 @@ def _zoomout_map(shape_1, shape_2, seed, config: DenseConfig, samples: tuple, ba
     runs = config.ensemble if config.ensemble >= 3 and not every_vertex else 1
     everywhere = np.arange(mesh_1.n_vertices), np.arange(mesh_2.n_vertices)
     signature_1, signature_2 = signature_coordinates(shape_1, shape_2, config, *everywhere)
-    steady_1, steady_2 = signature_turn_coordinates(shape_1, shape_2, config, seed.fields_1, seed.fields_2)
+    steady_1, steady_2 = signature_turn_coordinates(shape_1, shape_2, config, seed.fields_1, seed.fields_2, turns)
     values = (None, None)  # the commutativity term's eigenvalues
     if config.commutativity > 0:
         values = dense_eigenvalues(shape_1, config), dense_eigenvalues(shape_2, config)
@@ -300,7 +303,8 @@ def shape_operators(shape, feature_vertices=None, *, config: DenseConfig = Dense
     fast marchings run at once."""
     if config.method == "zoomout" or config.candidates > 1:
         dense_spectrum(shape, config)
-    if config.signature_weight > 0 or config.signature_turns > 0 or config.candidates > 1:
+    if (config.signature_weight > 0 or config.signature_turns > 0 or config.signature_turns_partial > 0
+            or config.candidates > 1):
         point_signature(shape, config)
     if feature_vertices is not None and config.method == "zoomout":
         for vertex in shape.mesh_index(feature_vertices):
@@ -404,7 +408,8 @@ def matching_of_map(correspondence, made: DenseMap, description_1, description_2
                           Matches(source, target, distance),
                           alternatives=(correspondence, *getattr(correspondence, "alternatives", ())),
                           margin=getattr(correspondence, "margin", np.inf),
-                          in_doubt=getattr(correspondence, "in_doubt", False))
+                          in_doubt=getattr(correspondence, "in_doubt", False),
+                          feature_counts=(len(description_1.feature_vertices), len(description_2.feature_vertices)))
 
 
 def map_check(shape_1, local: np.ndarray, distances_1, distances_2, turns_1, turns_2) -> tuple[float, float]:

@@ -160,12 +160,15 @@ def check_of_seeds(seed, seeds: list, margin: float) -> SeedVerdict:
 class SeedChoice:
     """What :func:`choose_seed` decided: the ``seed`` chosen among the usable ``seeds``
     (:class:`Seed` each), and both shapes' ZoomOut ``samples`` ``((s_1,), (s_2,))`` and ``bases``
-    ``((n_1, K), (n_2, K))`` the dense map goes on with (``(None, None)`` when none was needed)."""
+    ``((n_1, K), (n_2, K))`` the dense map goes on with (``(None, None)`` when none was needed),
+    and ``feature_counts`` ``(k1, k2)``, the shapes' feature points (the correspondence's; empty:
+    not known)."""
 
     seed: "Seed"
     seeds: list
     samples: tuple
     bases: tuple
+    feature_counts: tuple = ()
 
 
 def choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, timings: dict,
@@ -199,7 +202,8 @@ def choose_seed(shape_1, shape_2, correspondence, config: DenseConfig, say, timi
         raise DarcyanError(f"{shape_1.name} -> {shape_2.name}: fewer than {MIN_LANDMARKS} consistent landmark "
                            f"matches, a dense map needs at least {MIN_LANDMARKS}")
     timings["landmarks"] = time.perf_counter() - t
-    return SeedChoice(_chosen_seed(seeds, config.seed_margin), seeds, samples, bases)
+    return SeedChoice(_chosen_seed(seeds, config.seed_margin), seeds, samples, bases,
+                      tuple(getattr(correspondence, "feature_counts", ())))
 
 
 @dataclass(frozen=True)

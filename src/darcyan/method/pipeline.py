@@ -153,6 +153,9 @@ class Correspondence:
     runner-up's (exact below ``config.mirror.verify_below``, ``inf`` without a runner-up);
     ``in_doubt``: below it, so that short dense maps should decide
     (:func:`darcyan.dense.verified_matches`; ``darcyan match`` and ``darcyan bench`` do).
+    ``feature_counts``: ``(k1, k2)`` the feature points of each shape, matched or not (empty:
+    not known), which tells a dense map whether every extremity of the shape with fewer is
+    anchored by a landmark (``DenseConfig.signature_turns``).
     """
 
     source_vertex: np.ndarray
@@ -162,6 +165,7 @@ class Correspondence:
     alternatives: tuple = ()
     margin: float = np.inf
     in_doubt: bool = False
+    feature_counts: tuple = ()
 
     def __len__(self) -> int:
         return len(self.source_vertex)
@@ -480,13 +484,14 @@ def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
         matches = match_descriptors(shape_1.descriptors, shape_2.descriptors, config.matching)
 
     median = median_distance(descriptor_distances(shape_1.descriptors, shape_2.descriptors))
+    feature_counts = (len(shape_1.feature_vertices), len(shape_2.feature_vertices))
 
     def correspondence(matches: Matches, alternatives=(), margin=np.inf) -> Correspondence:
         matches = drop_dissimilar(matches, shape_1.descriptors, shape_2.descriptors, config.max_match_distance,
                                   median)
         return Correspondence(shape_1.feature_vertices[matches.source], shape_2.feature_vertices[matches.target],
                               matches.distance, matches, tuple(alternatives), float(margin),
-                              bool(margin < config.mirror.verify_below and alternatives))
+                              bool(margin < config.mirror.verify_below and alternatives), feature_counts)
 
     return correspondence(matches, [correspondence(m) for m in alternatives], margin)
 
