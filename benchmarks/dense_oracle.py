@@ -46,7 +46,7 @@ from dense_variants import DATA, add_sample_arguments, prepared_pair, read_pair_
 from darcyan.dense.config import DenseConfig
 from darcyan.dense.landmarks import landmark_coordinates
 from darcyan.dense.maps import DENSE_FAILURES, dense_map, input_map
-from darcyan.dense.signatures import signature_coordinates, signature_turn_coordinates
+from darcyan.dense.signatures import signature_coordinates, signature_turn_coordinates, signature_turn_weight
 from darcyan.dense.zoomout import dense_basis, dense_eigenvalues, fit_width, read_out_map, zoomout, zoomout_samples
 from darcyan.errors import DarcyanError
 from darcyan.eval.dense_scores import evaluate_dense_maps
@@ -123,7 +123,9 @@ def score_pair(task: tuple) -> dict:
     everywhere = np.arange(shape_1.mesh.n_vertices), np.arange(shape_2.mesh.n_vertices)
     coarse = signature_coordinates(shape_1, shape_2, config, *everywhere)
     k_landmarks = len(made.landmarks)  # coords: the distances to the landmarks first, then their turns
-    steady = signature_turn_coordinates(shape_1, shape_2, config, coords_1[:, :k_landmarks], coords_2[:, :k_landmarks])
+    turns = signature_turn_weight(k_landmarks, correspondence.feature_counts, config)  # as dense_map weighs them
+    steady = signature_turn_coordinates(shape_1, shape_2, config, coords_1[:, :k_landmarks], coords_2[:, :k_landmarks],
+                                        turns)
     extra = [None if c is None else c[s] for pair in (coarse, steady) for c, s in zip(pair, samples)]
     values = dense_eigenvalues(shape_1, config), dense_eigenvalues(shape_2, config)  # the commutativity term's
 

@@ -97,8 +97,7 @@ def test_zoomout_with_a_margin_keeps_the_true_map_of_a_renumbered_copy(figure_po
     order = np.random.default_rng(7).permutation(mesh.n_vertices)
     shape, copy = prepare_shape(mesh), prepare_shape(Mesh(mesh.vertices[order], np.argsort(order)[mesh.faces]))
     config = DenseConfig(basis_start=10, basis_size=20, basis_step=5, basis_margin=6, margin_from=15,
-                         landmark_weight=0, signature_weight=0, signature_turns=0,
-                         signature_turns_partial=0, commutativity=commutativity)
+                         landmark_weight=0, signature_weight=0, signature_turns=0, commutativity=commutativity)
     spectrum_1, spectrum_2 = shape.spectrum(26), copy.spectrum(26)
     basis_1, basis_2 = spectrum_1.vectors, spectrum_2.vectors
     truth_12, truth_21 = np.argsort(order), order
@@ -124,8 +123,7 @@ def test_the_coarse_to_fine_read_out_finds_the_true_map_as_the_full_one(figure_p
     order = np.random.default_rng(8).permutation(mesh.n_vertices)
     shape, copy = prepare_shape(mesh), prepare_shape(Mesh(mesh.vertices[order], np.argsort(order)[mesh.faces]))
     config = DenseConfig(basis_start=10, basis_size=20, basis_step=5, basis_margin=6, margin_from=15,
-                         landmark_weight=0, signature_weight=0, signature_turns=0,
-                         signature_turns_partial=0)
+                         landmark_weight=0, signature_weight=0, signature_turns=0)
     basis_1, basis_2 = shape.spectrum(26).vectors, copy.spectrum(26).vectors
     truth_12, truth_21 = np.argsort(order), order
     c_12, c_21 = zoomout(basis_1, basis_2, truth_12, truth_21, config)
@@ -344,8 +342,7 @@ def test_zoomouts_two_directions_side_by_side_give_the_same_bits_as_one_after_th
 
     shape_1, shape_2 = prepare_shape(figure_poses[0]), prepare_shape(figure_poses[1])
     config = DenseConfig(basis_start=6, basis_size=20, basis_step=2, basis_margin=4, margin_from=10,
-                         landmark_weight=0, signature_weight=0, signature_turns=0,
-                         signature_turns_partial=0)
+                         landmark_weight=0, signature_weight=0, signature_turns=0)
     rng = np.random.default_rng(3)
     sample_1, sample_2 = (rng.choice(s.n_vertices, 600, replace=False) for s in (shape_1, shape_2))
     basis_1, basis_2 = shape_1.spectrum(24).vectors[sample_1], shape_2.spectrum(24).vectors[sample_2]

@@ -384,7 +384,8 @@ class DenseConfig:
         signature_turns: weight of the :func:`~darcyan.dense.signatures.signature_turn_coordinates` (at each vertex, the
             turn from the gradient of the distance to each landmark to the gradient of each
             length of the point signature) beside the other terms of every ZoomOut step of the
-            chosen seed and of the final read-out (0: never). Along a limb the distances to all
+            chosen seed and of the final read-out (0: none for such maps; with
+            ``signature_turns_partial`` 0 too, never). Along a limb the distances to all
             the landmarks grow alike on all its sides; the turn from that direction to the one in
             which the curvature changes differs from one side to another (``docs/decisions/dense.md``).
             This weight holds when every feature point of the shape with fewer of them is a

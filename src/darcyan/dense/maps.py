@@ -207,7 +207,9 @@ def _without_contradicted(shape_1, shape_2, seed, residual: float, check: MapChe
     closely as the map of ``seed`` (``residual``; NaN without alignment: not a judge) and it
     agrees at least as well with its own landmarks' orientation as that map did with all of
     them (``check.orientation``). ``None`` otherwise (no pair contradicted, too few pairs to
-    leave one out, or the map refused). One pair, once: of two wrong pairs one is left."""
+    leave one out, or the map refused). One pair, once: of two wrong pairs one is left. The map
+    without the pair weighs its signature turns by its own landmarks
+    (:func:`~darcyan.dense.signatures.signature_turn_weight`): one extremity fewer is anchored."""
     t = time.perf_counter()
     found = contradicted_landmark(shape_1, shape_2, seed, config, choice.samples, choice.bases)
     timings["landmark check"] = time.perf_counter() - t

@@ -53,16 +53,15 @@ def signature_coordinates(shape_1, shape_2, config: DenseConfig, sample_1: np.nd
 
 
 def signature_turn_coordinates(shape_1, shape_2, config: DenseConfig, fields_1: np.ndarray,
-                               fields_2: np.ndarray, weight: float | None = None) -> tuple:
+                               fields_2: np.ndarray, weight: float) -> tuple:
     """``(turns_1 (n1, k l), turns_2 (n2, k l))``: at every vertex, the sine of the turn from the
     gradient of the distance to each of the k landmarks (``fields_i (n_i, k)``) to the gradient
     of each of the l lengths of the :func:`point_signature`, about the outward normal
-    (:func:`~darcyan.dense.landmarks.orientation_coordinates`), times ``weight`` (default
-    ``config.signature_turns``; see :func:`signature_turn_weight`) (``(None, None)`` at weight
-    0). An isometry keeps them and a reflection flips them, like the turns between
-    landmarks; unlike those, they do not vanish along a limb, where the directions to all the
-    landmarks run along it and only the curvature tells one side of it from another."""
-    weight = config.signature_turns if weight is None else weight
+    (:func:`~darcyan.dense.landmarks.orientation_coordinates`), times ``weight``
+    (:func:`signature_turn_weight` gives a map's; ``(None, None)`` at weight 0). An isometry
+    keeps them and a reflection flips them, like the turns between landmarks; unlike those,
+    they do not vanish along a limb, where the directions to all the landmarks run along it and
+    only the curvature tells one side of it from another."""
     if weight <= 0:
         return None, None
     return tuple(weight * orientation_coordinates(shape, fields, point_signature(shape, config))
@@ -73,8 +72,10 @@ def signature_turn_weight(landmarks: int, feature_counts: tuple, config: DenseCo
     """The weight of the :func:`signature_turn_coordinates` of a map with ``landmarks`` landmark
     pairs between shapes with ``feature_counts`` ``(k1, k2)`` feature points:
     ``config.signature_turns`` when there are at least as many landmarks as the shape with fewer
-    feature points has (every extremity of it anchored; so too when the counts are not known),
-    ``config.signature_turns_partial`` otherwise. The turns pull each vertex towards the side of
+    feature points has (every extremity of it anchored; so too when the counts are not known,
+    and for the landmarks of a start without the matches, farthest points spread over the whole
+    source), ``config.signature_turns_partial`` otherwise: a map made without a landmark pair
+    the others contradict has one pair fewer, and is weighed by its own count. The turns pull each vertex towards the side of
     its limb the curvature says; along a limb without a landmark nothing holds its place along
     the limb, and strong turns let the map slide there (``docs/decisions/every-pair.md``)."""
     if len(feature_counts) == 2 and landmarks < min(feature_counts):

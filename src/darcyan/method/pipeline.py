@@ -155,7 +155,7 @@ class Correspondence:
     (:func:`darcyan.dense.verified_matches`; ``darcyan match`` and ``darcyan bench`` do).
     ``feature_counts``: ``(k1, k2)`` the feature points of each shape, matched or not (empty:
     not known), which tells a dense map whether every extremity of the shape with fewer is
-    anchored by a landmark (``DenseConfig.signature_turns``).
+    anchored by a landmark (:func:`darcyan.dense.signatures.signature_turn_weight`).
     """
 
     source_vertex: np.ndarray
