@@ -509,7 +509,7 @@ class DenseConfig:
     signature_diffusion_steps: int | None = None
     signature_weight: float = 3.0
     signature_until: int = 70
-    signature_turns: float = 4.0
+    signature_turns: float = 3.0
     signature_turns_partial: float = 2.0
     seed_margin: float = 0.04
     trust_orientation: float = 0.55
