@@ -20,7 +20,7 @@ import dataclasses
 import sys
 
 import numpy as np
-from pair_sets import pair_set_parser, run_reporting_errors  # benchmarks/pair_sets.py
+from pair_sets import pair_set_parser, pair_truth, run_reporting_errors  # benchmarks/pair_sets.py
 
 
 def main(argv=None) -> int:
@@ -34,7 +34,7 @@ def _check(args) -> int:
     from darcyan.dense.landmarks import landmark_set
     from darcyan.dense.seeds import Seed, landmark_displacements
     from darcyan.dense.zoomout import dense_basis, zoomout_samples
-    from darcyan.eval.metrics import DEFAULT_THRESHOLD, GroundTruth, read_vts, score_matches
+    from darcyan.eval.metrics import DEFAULT_THRESHOLD, score_matches
     from darcyan.method.pipeline import Correspondence
 
     config = DenseConfig()
@@ -55,8 +55,7 @@ def _check(args) -> int:
         samples = zoomout_samples(shape_1, shape_2, config)
         bases = dense_basis(shape_1, config), dense_basis(shape_2, config)
         moved = landmark_displacements(shape_1, shape_2, seed, config, samples, bases)
-        truth = GroundTruth.identity() if dataset.truth == "identity" else \
-            GroundTruth(read_vts(dataset.vts(source)), read_vts(dataset.vts(target)))
+        truth = pair_truth(dataset, source, target)
         kept = Correspondence(shape_1.mesh.input_index[seed.source], shape_2.mesh.input_index[seed.target],
                               np.zeros(len(seed.source)), None)
         errors = score_matches(shape_1, shape_2, kept, truth).errors  # as darcyan bench scores matches

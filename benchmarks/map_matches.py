@@ -22,7 +22,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from pair_sets import pair_set_parser, run_reporting_errors  # benchmarks/pair_sets.py
+from pair_sets import pair_set_parser, pair_truth, run_reporting_errors  # benchmarks/pair_sets.py
 
 WAYS = ("sparse", "written", "every map")
 
@@ -38,7 +38,7 @@ def _run(args) -> int:
     from darcyan.bench.datasets import discover_dataset, read_pairs
     from darcyan.dense.maps import matching_of_map
     from darcyan.errors import DarcyanError
-    from darcyan.eval.metrics import DEFAULT_THRESHOLD, GroundTruth, read_vts, score_matches
+    from darcyan.eval.metrics import score_matches
 
     dataset = discover_dataset(args.dataset)
     pairs = read_pairs(args.pairs, dataset)
@@ -48,6 +48,11 @@ def _run(args) -> int:
     done = {(row["source"], row["target"]) for row in rows}
     cache = darcyan.ShapeCache(Path(tempfile.gettempdir()) / "darcyan-map-matches-cache")
     with out.open("a") as written:
+        def keep(row: dict) -> None:  # written as it comes: a stopped run resumes from it
+            written.write(json.dumps(row) + "\n")
+            written.flush()
+            rows.append(row)
+
         for source, target in pairs:
             if (source, target) in done:
                 continue
@@ -56,24 +61,17 @@ def _run(args) -> int:
             try:
                 result = darcyan.correspond(*files, dense=True, repair=args.repair, cache=cache).pairs[0]
             except DarcyanError as exc:  # no map: said, kept, and the next pair
-                row = {"source": source, "target": target, "error": str(exc)}
-                written.write(json.dumps(row) + "\n")
-                written.flush()
-                rows.append(row)
+                keep({"source": source, "target": target, "error": str(exc)})
                 print(f"{source} -> {target}: {exc}", flush=True)
                 continue
             shape_1, shape_2 = result.shapes
             read = matching_of_map(sparse.pairs[0].matches, result.dense, *sparse.descriptions, shape_2)
-            truth = GroundTruth.identity() if dataset.truth == "identity" else \
-                GroundTruth(read_vts(dataset.vts(source)), read_vts(dataset.vts(target)))
+            truth = pair_truth(dataset, source, target)
             row = {"source": source, "target": target, "trusted": bool(result.dense.check.trusted)}
             for way, matches in zip(WAYS, (sparse.pairs[0].matches, result.matches, read)):
-                errors = score_matches(shape_1, shape_2, matches, truth).errors
-                errors = errors[~np.isnan(errors)]
-                row[way] = [int((errors <= DEFAULT_THRESHOLD).sum()), len(errors)]
-            written.write(json.dumps(row) + "\n")
-            written.flush()
-            rows.append(row)
+                score = score_matches(shape_1, shape_2, matches, truth)
+                row[way] = [score.correct, int(np.isfinite(score.errors).sum())]  # right / matches with a truth
+            keep(row)
             print(f"{source} -> {target}: " + ", ".join(f"{w} {row[w][0]}/{row[w][1]}" for w in WAYS), flush=True)
     mapped = [r for r in rows if "error" not in r]
     if len(rows) > len(mapped):

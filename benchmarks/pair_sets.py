@@ -18,6 +18,16 @@ def pair_set_parser(doc: str) -> argparse.ArgumentParser:
     return parser
 
 
+def pair_truth(dataset, source: str, target: str):
+    """The :class:`~darcyan.eval.metrics.GroundTruth` of ``source -> target`` in ``dataset`` (a
+    :func:`~darcyan.bench.datasets.discover_dataset`): one numbering, or the pair's vts files."""
+    from darcyan.eval.metrics import GroundTruth, read_vts
+
+    if dataset.truth == "identity":
+        return GroundTruth.identity()
+    return GroundTruth(read_vts(dataset.vts(source)), read_vts(dataset.vts(target)))
+
+
 def run_reporting_errors(name: str, run, args) -> int:
     """``run(args)``, a :class:`~darcyan.errors.DarcyanError` (a bad dataset, pair list or mesh)
     said as one line ``NAME: error: ...`` with exit status 2, never a traceback."""

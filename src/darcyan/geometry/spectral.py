@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import sys
 import threading
@@ -172,9 +173,15 @@ def _redirect_standard_output() -> int | None:
 
 def _flush_c_output() -> None:
     """Flush C's own stdio buffers (the C library's; none to ask on Windows)."""
-    import ctypes
-
     try:
-        ctypes.CDLL(None).fflush(None)
+        _c_library().fflush(None)
     except (OSError, AttributeError, TypeError):
         pass
+
+
+@functools.cache
+def _c_library():
+    """The process's C library (loaded once: each factorization flushes it twice)."""
+    import ctypes
+
+    return ctypes.CDLL(None)
