@@ -68,27 +68,32 @@ class Mesh:
     def n_faces(self) -> int:
         return len(self.faces)
 
+    def kept(self, key: str, compute):
+        """``compute()``, once per mesh and ``key``, kept on the mesh (a mesh is not changed in
+        place, so what is derived from it alone stays true): its measures and operators. An
+        array kept is made read-only."""
+        cached = self.__dict__.get(key)
+        if cached is None:
+            cached = compute()
+            if isinstance(cached, np.ndarray):
+                cached.flags.writeable = False
+            object.__setattr__(self, key, cached)
+        return cached
+
     def face_areas(self) -> np.ndarray:
         """``(m,)`` triangle areas (computed once, read-only: a mesh is not changed in place)."""
-        cached = self.__dict__.get("_face_areas")
-        if cached is None:
-            cached = face_areas(self.vertices, self.faces)
-            cached.flags.writeable = False
-            object.__setattr__(self, "_face_areas", cached)
-        return cached
+        return self.kept("_face_areas", lambda: face_areas(self.vertices, self.faces))
 
     def area(self) -> float:
         return float(self.face_areas().sum())
 
     def edges(self) -> np.ndarray:
         """``(e, 2)`` unique undirected edges, smaller index first, sorted (computed once, read-only)."""
-        cached = self.__dict__.get("_edges")
-        if cached is None:
+        def edges():
             keys, _ = _edge_counts(self.faces, self.n_vertices)
-            cached = np.stack([keys // max(self.n_vertices, 1), keys % max(self.n_vertices, 1)], axis=1)
-            cached.flags.writeable = False
-            object.__setattr__(self, "_edges", cached)
-        return cached
+            return np.stack([keys // max(self.n_vertices, 1), keys % max(self.n_vertices, 1)], axis=1)
+
+        return self.kept("_edges", edges)
 
     def content_hash(self) -> str:
         """Hash of the geometry and connectivity (not the name): a cache key for per-shape work."""

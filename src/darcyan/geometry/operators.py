@@ -26,7 +26,19 @@ if TYPE_CHECKING:
 
 
 def mixed_voronoi_area(mesh: Mesh) -> np.ndarray:
-    """``(n,)`` Meyer's mixed area: Voronoi for non-obtuse triangles, else 1/2 or 1/4 of the face."""
+    """``(n,)`` Meyer's mixed area: Voronoi for non-obtuse triangles, else 1/2 or 1/4 of the face
+    (computed once per mesh, read-only, like :meth:`~darcyan.geometry.mesh.Mesh.face_areas`:
+    curvature, the heat diffusions and both spectra of one mesh read the same array)."""
+    return mesh.kept("_mixed_voronoi_area", lambda: _mixed_voronoi_area(mesh))
+
+
+def cotangent_laplacian(mesh: Mesh) -> sp.csr_matrix:
+    """``(n, n)`` L with ``(L x)_i = sum_j (cot a_ij + cot b_ij) / 2 * (x_j - x_i)`` (negative
+    semidefinite; computed once per mesh, its arrays read-only)."""
+    return mesh.kept("_cotangent_laplacian", lambda: _cotangent_laplacian(mesh))
+
+
+def _mixed_voronoi_area(mesh: Mesh) -> np.ndarray:
     import igl  # lazily: igl imports scipy
 
     area = igl.massmatrix(mesh.vertices, mesh.faces, igl.MASSMATRIX_TYPE_VORONOI).diagonal()
@@ -37,14 +49,16 @@ def mixed_voronoi_area(mesh: Mesh) -> np.ndarray:
     return area
 
 
-def cotangent_laplacian(mesh: Mesh) -> sp.csr_matrix:
-    """``(n, n)`` L with ``(L x)_i = sum_j (cot a_ij + cot b_ij) / 2 * (x_j - x_i)`` (negative semidefinite)."""
+def _cotangent_laplacian(mesh: Mesh) -> sp.csr_matrix:
     import igl  # lazily: igl imports scipy
 
     laplacian = igl.cotmatrix(mesh.vertices, mesh.faces)
     if not np.isfinite(laplacian.data).all():  # a zero-area face: libigl divides by its area
         laplacian = igl.cotmatrix(mesh.vertices, nondegenerate_faces(mesh))
-    return laplacian.tocsr()
+    laplacian = laplacian.tocsr()
+    for array in (laplacian.data, laplacian.indices, laplacian.indptr):
+        array.flags.writeable = False
+    return laplacian
 
 
 def nondegenerate_faces(mesh: Mesh, keep_collinear: bool = False) -> np.ndarray:
