@@ -123,3 +123,24 @@ def test_a_source_out_of_range_is_an_error_not_a_hang(sphere):
         with pytest.raises(MeshError, match="out of range"):
             call()
     assert np.isclose(solver.distance(sphere.n_vertices - 1).min(), 0.0)  # the last vertex is in range
+
+
+def test_bow_ties_of_a_piece_are_the_vertices_of_several_fans(sphere):
+    """The count rule of ``piece_bow_ties`` (edges minus faces at a vertex) against the fans
+    ``nonmanifold_vertices`` finds by connected components, on random face subsets of a closed
+    mesh and of an open one (the flat disc: its boundary vertices start with an open fan)."""
+    from darcyan.geometry.geodesics import piece_bow_ties
+    from darcyan.geometry.mesh import Mesh
+    from darcyan.geometry.repair import nonmanifold_vertices
+
+    rng = np.random.default_rng(0)
+    found = 0
+    for whole in (prepare_mesh(sphere)[0], prepare_mesh(synthetic.flat_disc(radius=1.0, rings=20))[0]):
+        for share in (0.3, 0.6, 0.9):
+            faces = whole.faces[rng.random(whole.n_faces) < share]
+            used, renumbered = np.unique(faces, return_inverse=True)
+            piece = Mesh(whole.vertices[used], renumbered.reshape(-1, 3))
+            expected = nonmanifold_vertices(piece)
+            np.testing.assert_array_equal(piece_bow_ties(piece), expected)
+            found += len(expected)
+    assert found > 100  # the subsets do leave vertices of several fans to find

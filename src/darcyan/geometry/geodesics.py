@@ -272,20 +272,33 @@ class LocalGeodesicSolver:
                             np.inf, None)
 
 
+def piece_bow_ties(piece: Mesh) -> np.ndarray:
+    """The vertices where faces of ``piece``, a subset of the faces of a manifold mesh (a
+    prepared one), meet in more than one fan: those with at least two more distinct edges than
+    faces. Around a vertex of a manifold mesh the faces form one fan, and a subset of them falls
+    into runs of consecutive faces, a run of j faces having j + 1 edges of its own (the whole
+    closed fan: as many edges as faces); so edges minus faces counts the runs. The same vertices
+    as :func:`darcyan.geometry.repair.nonmanifold_vertices` finds on such a piece, without its
+    connected components (a few milliseconds a ball on a 52k-vertex mesh)."""
+    n = piece.n_vertices
+    edges = piece.edges()
+    edges_at = np.bincount(edges.ravel(), minlength=n)
+    faces_at = np.bincount(piece.faces.ravel(), minlength=n)
+    return np.flatnonzero(edges_at - faces_at >= 2)
+
+
 def _manifold_piece(mesh: Mesh, inside: np.ndarray) -> tuple[Mesh, np.ndarray, np.ndarray] | None:
     """The faces ``inside`` (a ``(m,)`` mask) of ``mesh`` as a mesh of their own, with every face
     around a vertex where they meet only at a corner added (the solvers refuse such bow ties).
     Returns the piece, ``(k,)`` the whole mesh's index of each of its vertices, and the final mask;
     ``None`` when the piece would be the whole mesh."""
-    from .repair import nonmanifold_vertices
-
     while not inside.all():
         faces = mesh.faces[inside]
         used = np.flatnonzero(np.bincount(faces.ravel(), minlength=mesh.n_vertices))
         index = np.full(mesh.n_vertices, -1, dtype=np.int64)
         index[used] = np.arange(len(used))
         piece = Mesh(mesh.vertices[used], index[faces], name=mesh.name)
-        bow_ties = nonmanifold_vertices(piece)
+        bow_ties = piece_bow_ties(piece)
         if not len(bow_ties):
             return piece, used, inside
         around = np.zeros(mesh.n_vertices, bool)
