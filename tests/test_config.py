@@ -17,6 +17,7 @@ from darcyan.config import (
     PREPARE,
     SAMPLINGS,
     SECTIONS,
+    LAPLACIANS,
     SEED_STATISTICS,
     DarcyanConfig,
     MirrorTest,
@@ -47,7 +48,7 @@ def _other_value(value):
 
 # The choices of each setting that is a name: another one of them is its other value.
 CHOICES = {"matching": MATCHING_MODES, "method": METHODS, "landmarks": LANDMARK_MODES, "sampling": SAMPLINGS,
-           "seed_statistic": SEED_STATISTICS}
+           "seed_statistic": SEED_STATISTICS, "basis_laplacian": LAPLACIANS}
 
 
 def _changed(config: DarcyanConfig, dotted: str) -> DarcyanConfig:

@@ -289,6 +289,7 @@ def _check(section, names, ok, what: str) -> None:
 LANDMARK_MODES = ("consistent", "all")
 METHODS = ("zoomout", "pyfm")
 SAMPLINGS = ("farthest", "random")  # DenseConfig.sampling
+LAPLACIANS = ("cotangent", "robust")  # DenseConfig.basis_laplacian
 SEED_STATISTICS = ("median", "mean")  # DenseConfig.seed_statistic
 
 
@@ -350,6 +351,10 @@ class DenseConfig:
         basis_tolerance: relative accuracy of the eigenvalues asked of the eigensolver (its
             start vector is seeded): 1e-3 gives the vectors of machine precision in half the
             time (``docs/decisions/dense.md``).
+        basis_laplacian: the Laplacian whose eigenfunctions are the basis: ``"cotangent"``
+            (the mesh's own cotangent Laplacian and mixed Voronoi areas) or ``"robust"`` (Sharp
+            and Crane's intrinsic Delaunay Laplacian, ``robust_laplacian``, which has no negative
+            weights on a mesh of poor triangles).
         basis_lanczos: Lanczos vectors the eigensolver keeps per eigenpair asked (ARPACK's
             ``ncv``; 0: scipy's default, max(2 k + 1, 20)): fewer make each restart cheaper and
             need more restarts; 1.5 took 12% less time than the default on six 5k meshes
@@ -500,6 +505,7 @@ class DenseConfig:
     basis_proxy_vertices: int = 6000
     basis_tolerance: float = 1e-3
     basis_lanczos: float = 1.5
+    basis_laplacian: str = "cotangent"
     candidates: int = 4
     seed_statistic: str = "median"
     seed_basis: int = 30
@@ -534,6 +540,8 @@ class DenseConfig:
     def __post_init__(self) -> None:
         if self.method not in METHODS:
             raise ConfigError(f"dense: method must be one of {METHODS}, got {self.method!r}")
+        if self.basis_laplacian not in LAPLACIANS:
+            raise ConfigError(f"dense: basis_laplacian must be one of {LAPLACIANS}, got {self.basis_laplacian!r}")
         if self.sampling not in SAMPLINGS:
             raise ConfigError(f"dense: sampling must be one of {SAMPLINGS}, got {self.sampling!r}")
         if self.seed_statistic not in SEED_STATISTICS:

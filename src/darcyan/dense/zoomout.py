@@ -95,7 +95,7 @@ def dense_spectrum(shape, config: DenseConfig):
     size = fit_width(config.basis_size, config)
     return shape.smooth_spectrum(min(size, shape.mesh.n_vertices - 1), config.basis_proxy_vertices,
                                  tol=config.basis_tolerance, shift=EIGSH_SHIFT, lanczos=config.basis_lanczos,
-                                 cholesky=True)
+                                 cholesky=True, laplacian=config.basis_laplacian)
 
 
 def dense_basis(shape, config: DenseConfig) -> np.ndarray:

@@ -131,7 +131,7 @@ class Shape:
                           lambda: laplace_beltrami_spectrum(self.mesh, k, laplacian, tol, shift, lanczos, cholesky))
 
     def smooth_basis(self, k: int, proxy_vertices: int = 0, tol: float = 0.0, shift: float = SHIFT,
-                     lanczos: float = 0.0, cholesky: bool = False):
+                     lanczos: float = 0.0, cholesky: bool = False, laplacian: str = "cotangent"):
         """``(n, k)`` the ``k`` first Laplace-Beltrami eigenfunctions at the vertices. On a mesh
         with more than twice ``proxy_vertices`` vertices they are computed on its coarse
         :meth:`proxy` and interpolated (smooth functions lose nothing there; the eigensolver on
@@ -139,26 +139,27 @@ class Shape:
         ndarray but :class:`~darcyan.geometry.proxy.InterpolatedRows`, interpolated as rows are
         read (index it first: ``basis[rows, :k]``; ``np.asarray(basis)`` makes the whole array).
         ``tol``: the eigensolver's relative accuracy (0: machine precision); ``lanczos``,
-        ``cholesky``: how it solves (see :func:`~darcyan.geometry.spectral.laplace_beltrami_spectrum`)."""
-        return self.smooth_spectrum(k, proxy_vertices, tol, shift, lanczos, cholesky).vectors
+        ``cholesky``: how it solves, ``laplacian``: which (see
+        :func:`~darcyan.geometry.spectral.laplace_beltrami_spectrum`)."""
+        return self.smooth_spectrum(k, proxy_vertices, tol, shift, lanczos, cholesky, laplacian).vectors
 
     def smooth_spectrum(self, k: int, proxy_vertices: int = 0, tol: float = 0.0, shift: float = SHIFT,
-                        lanczos: float = 0.0, cholesky: bool = False) -> Spectrum:
+                        lanczos: float = 0.0, cholesky: bool = False, laplacian: str = "cotangent") -> Spectrum:
         """The eigenpairs behind :meth:`smooth_basis`: on a large mesh the coarse proxy's
         eigenvalues and its eigenvectors interpolated to the vertices (``mass``: the mesh's
         vertex areas; the interpolated vectors are then not mass-orthonormal, and are
         :class:`~darcyan.geometry.proxy.InterpolatedRows`: interpolated as they are read)."""
         proxy = self.proxy(proxy_vertices) if proxy_vertices > 0 else None
         if proxy is None:
-            return self.spectrum(k, tol, shift, lanczos=lanczos, cholesky=cholesky)
+            return self.spectrum(k, tol, shift, laplacian, lanczos, cholesky)
 
         def interpolated():
-            coarse = self._once(("proxy spectrum", k, proxy_vertices, tol, shift, lanczos, cholesky),
-                                lambda: laplace_beltrami_spectrum(proxy.mesh, min(k, proxy.mesh.n_vertices - 1), tol=tol,
-                                                                  shift=shift, lanczos=lanczos, cholesky=cholesky))
+            coarse = self._once(("proxy spectrum", k, proxy_vertices, tol, shift, lanczos, cholesky, laplacian),
+                                lambda: laplace_beltrami_spectrum(proxy.mesh, min(k, proxy.mesh.n_vertices - 1), laplacian,
+                                                                  tol, shift, lanczos, cholesky))
             return Spectrum(coarse.values, proxy.rows_on_demand(coarse.vectors), self.vertex_areas)
 
-        return self._once(("proxy basis", k, proxy_vertices, tol, shift, lanczos, cholesky), interpolated)
+        return self._once(("proxy basis", k, proxy_vertices, tol, shift, lanczos, cholesky, laplacian), interpolated)
 
     def proxy(self, vertices: int):
         """A :class:`~darcyan.geometry.proxy.CoarseProxy` of about ``vertices`` vertices, or

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..config import LAPLACIANS
 from ..errors import ConfigError, MeshError, require
 from .mesh import Mesh
 
@@ -21,7 +22,6 @@ if TYPE_CHECKING:
 
 SPECTRUM_SIZE = 100  # eigenpairs (the constant one included) behind HKS and WKS
 SHIFT = -1e-3  # shift-invert target: just below 0, so the smallest eigenvalues converge first
-LAPLACIANS = ("cotangent", "robust")
 # eigsh starts from a random vector unless given one: a fixed start makes every spectrum, and all
 # that is built on it, the same bytes in every run and process.
 START_SEED = 0
