@@ -102,7 +102,7 @@ def run(args) -> int:
                 total["samples"] += score["samples"]
                 total["error"] += score["mean_error"] * score["samples"]
             if out:
-                out.write(json.dumps({"copy": str(folder), "source": a, "target": b, **scores}) + "\n")
+                out.write(json.dumps({"set": str(folder), "source": a, "target": b, **scores}) + "\n")
                 out.flush()
     print("| copies | original: within 0.05 / mean error x100 | carried | copy |")
     print("| --- | --- | --- | --- |")
