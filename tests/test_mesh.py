@@ -359,3 +359,21 @@ def test_binary_ply_with_a_negative_list_length_is_one_error(tmp_path):
 
 def test_a_mesh_is_shown_by_its_name_and_size():
     assert repr(Mesh(TETRA_V, TETRA_F, "tetra")) == "Mesh('tetra', 4 vertices, 4 faces)"
+
+
+def test_kept_operators_are_computed_once_and_stay_read_only_across_pickling(sphere):
+    """A mesh's mixed areas and cotangent Laplacian are one object for every reader, read-only,
+    and read-only again in a copy sent to another process (pickled)."""
+    import pickle
+
+    from darcyan.geometry.operators import cotangent_laplacian, mixed_voronoi_area
+
+    mesh = Mesh(sphere.vertices.copy(), sphere.faces.copy())
+    area, laplacian = mixed_voronoi_area(mesh), cotangent_laplacian(mesh)
+    assert mixed_voronoi_area(mesh) is area and cotangent_laplacian(mesh) is laplacian
+    copy = pickle.loads(pickle.dumps(mesh))
+    for kept in (area, laplacian.data, mixed_voronoi_area(copy), cotangent_laplacian(copy).data,
+                 cotangent_laplacian(copy).indices):
+        with pytest.raises(ValueError):
+            kept[0] = 1.0
+    np.testing.assert_array_equal(mixed_voronoi_area(copy), area)

@@ -351,14 +351,16 @@ class DenseConfig:
         basis_tolerance: relative accuracy of the eigenvalues asked of the eigensolver (its
             start vector is seeded): 1e-3 gives the vectors of machine precision in half the
             time (``docs/decisions/dense.md``).
-        basis_laplacian: the Laplacian whose eigenfunctions are the basis: ``"cotangent"``
-            (the mesh's own cotangent Laplacian and mixed Voronoi areas) or ``"robust"`` (Sharp
-            and Crane's intrinsic Delaunay Laplacian, ``robust_laplacian``, which has no negative
-            weights on a mesh of poor triangles).
         basis_lanczos: Lanczos vectors the eigensolver keeps per eigenpair asked (ARPACK's
             ``ncv``; 0: scipy's default, max(2 k + 1, 20)): fewer make each restart cheaper and
             need more restarts; 1.5 took 12% less time than the default on six 5k meshes
             (``docs/decisions/speed.md``).
+        basis_laplacian: the Laplacian whose eigenfunctions are the basis: ``"cotangent"``
+            (the mesh's own cotangent Laplacian and mixed Voronoi areas) or ``"robust"`` (Sharp
+            and Crane's intrinsic Delaunay Laplacian, from ``robust_laplacian`` in the ``bench``
+            extra, which has no negative weights on a mesh of poor triangles). The robust one
+            gained nothing on the marching-cubes copies and lost on the glued ones
+            (``docs/decisions/every-pair.md``).
         basis_proxy_vertices: the basis of a mesh with more than twice this many vertices is
             computed on a decimated copy of about this many and interpolated
             (:meth:`darcyan.geometry.shape.Shape.smooth_basis`); 0: always on the mesh itself.

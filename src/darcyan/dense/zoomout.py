@@ -7,8 +7,9 @@ bijectivity and orthogonality terms of Ren et al. (*Discrete Optimization for Sh
 2021), a Laplacian commutativity term in the fits and other coordinates beside the spectral ones
 (:func:`map_embeddings`). It iterates on random surface samples (:func:`zoomout_samples`); the
 final map is read out for every source vertex (:func:`read_out_map`). The basis: cotangent
-stiffness, mixed Voronoi mass, ``scipy.sparse.linalg.eigsh`` (:func:`dense_spectrum`; on a
-decimated proxy of a large mesh, interpolated).
+stiffness, mixed Voronoi mass (or the intrinsic Delaunay Laplacian's, ``DenseConfig.basis_laplacian``),
+``scipy.sparse.linalg.eigsh`` (:func:`dense_spectrum`; on a decimated proxy of a large mesh,
+interpolated).
 
 Memory stays O(V): the functional maps are (k + margin) x k, nearest neighbours are searched
 by blocks of source rows (:class:`MapSearch`), and on a large target near each image's nearest

@@ -70,15 +70,21 @@ class Mesh:
 
     def kept(self, key: str, compute):
         """``compute()``, once per mesh and ``key``, kept on the mesh (a mesh is not changed in
-        place, so what is derived from it alone stays true): its measures and operators. An
-        array kept is made read-only."""
+        place, so what is derived from it alone stays true): its measures and operators, read
+        by every stage that works on it. What is kept is read-only (an array, or a sparse
+        matrix's arrays) and travels with the mesh when it is pickled: a shape prepared in a
+        worker process brings its operators back (a cotangent Laplacian is about 84 bytes a
+        vertex), and they stay read-only there (:meth:`__setstate__`)."""
         cached = self.__dict__.get(key)
         if cached is None:
-            cached = compute()
-            if isinstance(cached, np.ndarray):
-                cached.flags.writeable = False
+            cached = _read_only(compute())
             object.__setattr__(self, key, cached)
         return cached
+
+    def __setstate__(self, state: dict) -> None:
+        """Unpickled: what :meth:`kept` kept is made read-only again (pickling drops the flag)."""
+        object.__setattr__(self, "__dict__", {key: _read_only(value) if key.startswith("_") else value
+                                              for key, value in state.items()})
 
     def face_areas(self) -> np.ndarray:
         """``(m,)`` triangle areas (computed once, read-only: a mesh is not changed in place)."""
@@ -104,6 +110,17 @@ class Mesh:
 
     def with_vertices(self, vertices: np.ndarray) -> "Mesh":
         return Mesh(vertices, self.faces, self.name, self.input_index)
+
+
+def _read_only(value):
+    """``value`` with its arrays made read-only: an ndarray, or a scipy sparse matrix's data and
+    index arrays (anything else as it is)."""
+    arrays = [value] if isinstance(value, np.ndarray) else [getattr(value, name, None)
+                                                            for name in ("data", "indices", "indptr")]
+    for array in arrays:
+        if isinstance(array, np.ndarray):
+            array.flags.writeable = False
+    return value
 
 
 def _edge_counts(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:

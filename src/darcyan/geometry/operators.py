@@ -55,10 +55,7 @@ def _cotangent_laplacian(mesh: Mesh) -> sp.csr_matrix:
     laplacian = igl.cotmatrix(mesh.vertices, mesh.faces)
     if not np.isfinite(laplacian.data).all():  # a zero-area face: libigl divides by its area
         laplacian = igl.cotmatrix(mesh.vertices, nondegenerate_faces(mesh))
-    laplacian = laplacian.tocsr()
-    for array in (laplacian.data, laplacian.indices, laplacian.indptr):
-        array.flags.writeable = False
-    return laplacian
+    return laplacian.tocsr()
 
 
 def nondegenerate_faces(mesh: Mesh, keep_collinear: bool = False) -> np.ndarray:

@@ -147,7 +147,7 @@ class Shape:
                         lanczos: float = 0.0, cholesky: bool = False, laplacian: str = "cotangent") -> Spectrum:
         """The eigenpairs behind :meth:`smooth_basis`: on a large mesh the coarse proxy's
         eigenvalues and its eigenvectors interpolated to the vertices (``mass``: the mesh's
-        vertex areas; the interpolated vectors are then not mass-orthonormal, and are
+        mixed Voronoi vertex areas, whichever ``laplacian``; the interpolated vectors are then not mass-orthonormal, and are
         :class:`~darcyan.geometry.proxy.InterpolatedRows`: interpolated as they are read)."""
         proxy = self.proxy(proxy_vertices) if proxy_vertices > 0 else None
         if proxy is None:
