@@ -96,7 +96,7 @@ def inspect_mesh(mesh: Mesh, degenerate_area: float = Repairing().degenerate_are
     keep = np.ones(len(faces), bool)
     keep[duplicate] = False
     keep[degenerate] = False
-    _, counts = _edge_counts(faces[keep], mesh.n_vertices)
+    _, counts = mesh.edge_counts() if keep.all() else _edge_counts(faces[keep], mesh.n_vertices)
     return MeshReport(duplicate, degenerate, np.flatnonzero(~used), int((counts > 2).sum()))
 
 
@@ -268,7 +268,7 @@ def split_nonmanifold(mesh: Mesh) -> tuple[Mesh, int]:
 
     Returns the mesh and how many faces were dropped.
     """
-    keys, counts = _edge_counts(mesh.faces, mesh.n_vertices)
+    keys, counts = mesh.edge_counts()
     on_edge = np.zeros(mesh.n_vertices, bool)
     tangled = keys[counts > 2]
     on_edge[tangled // mesh.n_vertices] = on_edge[tangled % mesh.n_vertices] = True
@@ -416,6 +416,8 @@ def _largest_component(mesh: Mesh) -> Mesh:
     areas = mesh.face_areas()
     comp_area = np.bincount(face_label, weights=areas, minlength=n_comp)
     best = int(np.argmax(comp_area))
+    if n_comp == 1:  # one component, every vertex on a face: the mesh as it is (what it keeps too)
+        return mesh
     keep_faces = face_label == best
     n_face_comps = len(np.unique(face_label))
     if n_face_comps > 1:
@@ -498,7 +500,7 @@ def fill_small_holes(mesh: Mesh, max_length: float, max_edges: int, loops: list 
     v, n = mesh.vertices, mesh.n_vertices
     limit = max_length * np.sqrt(mesh.area())
     smallest_face = degenerate_area * mesh.area() / mesh.n_faces
-    edges = _edge_counts(mesh.faces, n)[0]  # sorted keys
+    edges = mesh.edge_counts()[0]  # sorted keys
     added, left = [], [loop for loop in loops if not 3 <= len(loop) <= max_edges]
     for loop in small:
         apex, rim = loop[0], loop[1:]
