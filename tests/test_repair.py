@@ -380,3 +380,21 @@ def test_an_open_proxy_keeps_the_orientation_of_its_mesh():
     assert outward_share(full, np.zeros(3)) == 0
     proxy = CoarseProxy(full, 200)
     assert outward_share(proxy.mesh, np.zeros(3)) < 0.01
+
+
+def test_duplicate_faces_are_the_same_by_one_key_or_by_lexsort(monkeypatch):
+    """inspect_mesh's duplicate faces (the later copies, corners in any order) by one int64 key
+    per face and by numpy's lexsort, which larger meshes use."""
+    from darcyan.geometry import repair
+
+    base = synthetic.icosphere(subdivisions=2)
+    rng = np.random.default_rng(0)
+    copies = base.faces[rng.choice(base.n_faces, 40, replace=False)]
+    copies = np.take_along_axis(copies, np.argsort(rng.random(copies.shape), axis=1), axis=1)  # corners shuffled
+    faces = np.vstack([base.faces, copies])[rng.permutation(base.n_faces + len(copies))]
+    mesh = Mesh(base.vertices, faces)
+    by_key = repair.inspect_mesh(mesh).duplicate_faces
+    monkeypatch.setattr(repair, "ONE_KEY_VERTICES", 0)
+    by_lexsort = repair.inspect_mesh(Mesh(base.vertices, faces)).duplicate_faces
+    assert len(by_key) == 40
+    np.testing.assert_array_equal(by_key, by_lexsort)
