@@ -47,7 +47,7 @@ def carried_map(original_1, original_2, copy_1, copy_2, map_12: np.ndarray) -> n
     the copies: each copy vertex to the nearest original vertex (raw positions, one frame), its
     image, the nearest vertex of ``copy_2``'s prepared mesh (input numbering of the copy)."""
     mapped = np.flatnonzero(map_12 >= 0)  # original vertices the preparation kept
-    nearest_original = mapped[cKDTree(original_1.vertices[mapped]).query(copy_1.vertices)[1]]
+    nearest_original = mapped[cKDTree(original_1.vertices[mapped]).query(copy_1.raw.vertices)[1]]
     images = map_12[nearest_original]
     kept_2 = copy_2.mesh.input_index  # vertices the preparation kept
     return kept_2[cKDTree(copy_2.raw.vertices[kept_2]).query(original_2.vertices[images])[1]]
@@ -60,7 +60,6 @@ class _Copy:
         self.raw = load_mesh(path)
         self.shape = load_shape(path, repair=repair, warn=False)
         self.mesh = self.shape.mesh
-        self.vertices = self.raw.vertices
 
 
 def _scores(evaluations: dict) -> dict:

@@ -16,7 +16,7 @@ def heat_diffuse(mesh: Mesh, values: np.ndarray, length: float, area: np.ndarray
                  steps: int = HeatKernel().diffusion_steps, laplacian=None) -> np.ndarray:
     """Diffuse ``values (n,)`` for the time that spreads heat over about ``length``: ``steps``
     backward Euler steps of du/dt = Laplace(u) with total time length**2 / 2 (one factorization).
-    ``area`` (mixed Voronoi) and ``laplacian`` (cotangent), if already computed for ``mesh``."""
+    ``area`` (mixed Voronoi) and ``laplacian`` (cotangent): the mesh's own by default (kept on it)."""
     import scipy.sparse as sp
     from scipy.sparse.linalg import splu
 
@@ -54,14 +54,10 @@ def curvature_signature(mesh, mean_curvature: np.ndarray, lengths=MirrorTest().s
     magnitude 1: a cheap, intrinsic, mirror-blind signature that differs between the front and
     the back of a torso or a limb. ``known``: columns already made for this mesh, curvature and
     steps, by length; those missing are made and added to it."""
-    from .operators import cotangent_laplacian
-
     known = {} if known is None else known
-    missing = [length for length in lengths if length not in known]
-    if missing:
-        area, laplacian = mixed_voronoi_area(mesh), cotangent_laplacian(mesh)  # once for every length
-        for length in missing:
-            c = heat_diffuse(mesh, mean_curvature, length, area, diffusion_steps, laplacian)
+    for length in lengths:
+        if length not in known:
+            c = heat_diffuse(mesh, mean_curvature, length, steps=diffusion_steps)  # the mesh keeps its operators
             known[length] = c / max(float(np.abs(c).mean()), 1e-12)
     return np.stack([known[length] for length in lengths], axis=1)
 

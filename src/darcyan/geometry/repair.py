@@ -418,12 +418,12 @@ def _largest_component(mesh: Mesh) -> Mesh:
 
     graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
     n_comp, labels = connected_components(graph, directed=False)
+    if n_comp == 1:  # one component, every vertex on a face: the mesh as it is (what it keeps too)
+        return mesh
     face_label = labels[f[:, 0]]
     areas = mesh.face_areas()
     comp_area = np.bincount(face_label, weights=areas, minlength=n_comp)
     best = int(np.argmax(comp_area))
-    if n_comp == 1:  # one component, every vertex on a face: the mesh as it is (what it keeps too)
-        return mesh
     keep_faces = face_label == best
     n_face_comps = len(np.unique(face_label))
     if n_face_comps > 1:

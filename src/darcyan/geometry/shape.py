@@ -78,14 +78,14 @@ class Shape:
         """``(n, 3)`` unit vertex normals (outward)."""
         return vertex_normals(self.mesh)
 
-    @cached_property
+    @property
     def vertex_areas(self) -> np.ndarray:
-        """``(n,)`` Meyer's mixed Voronoi areas (they sum to 1)."""
+        """``(n,)`` Meyer's mixed Voronoi areas (they sum to 1; kept on the mesh)."""
         return mixed_voronoi_area(self.mesh)
 
-    @cached_property
+    @property
     def laplacian(self):
-        """``(n, n)`` cotangent Laplacian (scipy CSR, negative semidefinite)."""
+        """``(n, n)`` cotangent Laplacian (scipy CSR, negative semidefinite; kept on the mesh)."""
         return cotangent_laplacian(self.mesh)
 
     @cached_property
