@@ -61,3 +61,22 @@ def test_results_and_report_per_group(figures, tmp_path):
     assert f"| {sum(seconds) / len(seconds):.2f} |" in report  # a pair's mean time, not the class's sum
     assert (tmp_path / "out" / "group_curves.png").stat().st_size > 10_000
     assert result.computed == 6  # three sparse and three dense records
+
+
+def test_faust_held_out_pairs_are_outside_the_test_list(faust):
+    """benchmarks/faust5k_heldout_pairs.txt: 40 pairs of existing shapes, none in the published
+    test list in either order, their group the persons' (tr_reg_0XY: person X)."""
+    from pathlib import Path
+
+    listed = set()
+    for line in (faust / "test_pairs.txt").read_text().splitlines():
+        if line.strip():
+            a, b = line.split()[:2]
+            listed |= {(a, b), (b, a)}
+    text = (Path(__file__).resolve().parents[1] / "benchmarks" / "faust5k_heldout_pairs.txt").read_text()
+    rows = [line.split("\t") for line in text.splitlines() if line.strip() and not line.startswith("#")]
+    assert len(rows) == 40 and len({(a, b) for a, b, _ in rows}) == 40
+    for source, target, group in rows:
+        assert (faust / f"{source}.off").is_file() and (faust / f"{target}.off").is_file()
+        assert source != target and (source, target) not in listed
+        assert group == ("same person" if source[-2] == target[-2] else "two people")
