@@ -108,3 +108,22 @@ def test_the_matches_follow_the_seed_of_their_dense_map():
     chosen = matches_of_map(wrong, seeded_by(1))
     np.testing.assert_array_equal(chosen.target_vertex, tips)
     assert chosen.alternatives[0] is wrong
+
+
+@pytest.mark.slow
+def test_a_verification_reuses_the_source_prepared_beside_the_workers(small_pose_files, monkeypatch):
+    """Described in this process beside a worker, the source is not prepared again for the
+    verification of its matches (the target, described in the worker, is); the verified
+    matches are those of a run that prepares both again (one process)."""
+    import darcyan.api
+
+    a, b = small_pose_files
+    again = darcyan.correspond(a, b, cache=False, verify=True, jobs=1)[0]
+    loaded = []
+    real = darcyan.api.load_shape
+    monkeypatch.setattr(darcyan.api, "load_shape", lambda path, *args, **kw: loaded.append(path) or real(path, *args, **kw))
+    reused = darcyan.correspond(a, b, cache=False, verify=True, jobs=2)[0]
+    assert loaded == [b]
+    assert reused.verification["seed"] == again.verification["seed"]
+    np.testing.assert_array_equal(reused.matches.source_vertex, again.matches.source_vertex)
+    np.testing.assert_array_equal(reused.matches.target_vertex, again.matches.target_vertex)

@@ -21,7 +21,14 @@ from .errors import DarcyanError
 from .geometry.mesh import Mesh
 from .geometry.shape import Shape, prepare_shape
 from .io.cache import ShapeCache
-from .method.pipeline import Correspondence, analyze_shape, describe_and_prepare, describe_shapes, load_shape, match_shapes
+from .method.pipeline import (
+    Correspondence,
+    analyze_shape,
+    describe_and_prepare,
+    describe_keeping_first,
+    load_shape,
+    match_shapes,
+)
 from .parallel import owns_threads
 
 VERIFY_CHOICES = ("auto", True, False)
@@ -284,7 +291,9 @@ def _describe(inputs: list, prepared: dict, config: DarcyanConfig, repair: bool,
     """The descriptions of ``inputs``: the files together (cache, workers), the shapes given in
     memory from their ``prepared`` shapes. With ``dense_config`` (a dense map to follow), the
     files' shapes are prepared beside their descriptions, with what the map needs of each alone
-    (:func:`~darcyan.dense.maps.shape_operators`), and join ``prepared``."""
+    (:func:`~darcyan.dense.maps.shape_operators`), and join ``prepared``. Without it, the
+    source's shape joins ``prepared`` when this process prepared it beside the workers
+    (:func:`~darcyan.method.pipeline.describe_keeping_first`)."""
     files = [i for i, item in enumerate(inputs) if isinstance(item, (str, os.PathLike))]
     sources = [inputs[i] for i in files]
     described = {}
@@ -295,7 +304,10 @@ def _describe(inputs: list, prepared: dict, config: DarcyanConfig, repair: bool,
         described.update({i: description for i, (description, _) in zip(files, both)})
         prepared.update({i: shape for i, (_, shape) in zip(files, both)})
     else:
-        described.update(zip(files, describe_shapes(sources, config, repair, store, jobs)))
+        descriptions, first = describe_keeping_first(sources, config, repair, store, jobs)
+        described.update(zip(files, descriptions))
+        if first is not None and files[0] == 0:  # the source, prepared here: a verification reuses it
+            prepared[0] = first
     return [described[i] for i in range(len(inputs))]
 
 

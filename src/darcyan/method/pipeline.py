@@ -338,13 +338,31 @@ def describe_shapes(sources: list, config: DarcyanConfig = DarcyanConfig(), repa
     """:func:`describe_shape` each file of ``sources``; with ``jobs > 1``, the files not found in
     the cache are described at once in up to ``jobs`` worker processes. A description made in a
     worker holds only the cacheable part, as one read from the cache."""
+    return _descriptions(sources, config, repair, cache, jobs)[0]
+
+
+@owns_threads
+def describe_keeping_first(sources: list, config: DarcyanConfig = DarcyanConfig(), repair: bool = False,
+                           cache: ShapeCache | None = None, jobs: int = 1) -> tuple:
+    """``(descriptions, shape)``: :func:`describe_shapes`, and the first file's prepared
+    :class:`~darcyan.geometry.shape.Shape` when this process prepared it anyway, beside workers
+    describing the others (``None`` otherwise: its description came from the cache, or was made
+    in turn or in a worker). Kept at no cost, so that a verification of the first file's matches
+    (``darcyan match``'s source) does not prepare it again: 0.3-1 s of a 52k pair in doubt."""
+    return _descriptions(sources, config, repair, cache, jobs, keep_first=True)
+
+
+def _descriptions(sources: list, config: DarcyanConfig, repair: bool, cache: ShapeCache | None, jobs: int,
+                  keep_first: bool = False) -> tuple:
+    """``(descriptions, first shape or None)`` of :func:`describe_keeping_first`."""
     paths = [Path(s) for s in sources]
     keys = [_cache_key(cache, p, config, repair) for p in paths]
     results = [_cached(cache, k, p) for k, p in zip(keys, paths)]
     todo = [i for i, r in enumerate(results) if r is None]
     if jobs <= 1 or len(todo) <= 1:
-        return [r if r is not None else describe_shape(p, config, repair, cache) for r, p in zip(results, paths)]
-    return [described for described, _ in _describe_files(paths, keys, results, config, repair, cache, jobs)]
+        return [r if r is not None else describe_shape(p, config, repair, cache) for r, p in zip(results, paths)], None
+    described = _describe_files(paths, keys, results, config, repair, cache, jobs, keep_first=keep_first)
+    return [description for description, _ in described], described[0][1]
 
 
 @owns_threads
@@ -366,15 +384,18 @@ def describe_and_prepare(sources: list, config: DarcyanConfig = DarcyanConfig(),
 
 
 def _describe_files(paths: list, keys: list, results: list, config: DarcyanConfig, repair: bool, cache,
-                    jobs: int, keep_shapes: bool = False, extra=None) -> list:
+                    jobs: int, keep_shapes: bool = False, extra=None, keep_first: bool = False) -> list:
     """``[(description, shape or None)]`` of :func:`describe_shapes` and :func:`describe_and_prepare`:
     the files whose description ``results`` lacks (``None``) described, and, with ``keep_shapes``,
-    every file prepared (``extra(shape, feature_vertices)`` called on it) and its shape returned; the work spread
-    over processes by :func:`_across_processes`, the new descriptions saved under ``keys``."""
+    every file prepared (``extra(shape, feature_vertices)`` called on it) and its shape returned
+    (with ``keep_first``, the first file's when it is described in this process: no pickling);
+    the work spread over processes by :func:`_across_processes`, the new descriptions saved
+    under ``keys``."""
     run = [i for i, described in enumerate(results) if keep_shapes or described is None]
+    here = jobs <= 1 or len(run) <= jobs  # _across_processes runs the first task in this process
     # A known description travels as its feature points alone: all that extra reads of it.
-    tasks = [(paths[i], config, repair, None if results[i] is None else results[i].feature_vertices, keep_shapes,
-              extra) for i in run]
+    tasks = [(paths[i], config, repair, None if results[i] is None else results[i].feature_vertices,
+              keep_shapes or (keep_first and here and i == 0), extra) for i in run]
     shapes = [None] * len(paths)
     for i, (arrays, said, shape) in zip(run, _across_processes(_prepared, tasks, jobs)):
         shapes[i] = shape
