@@ -38,8 +38,9 @@ def test_bad_sampling_is_a_config_error():
         DenseConfig(sampling="poisson")
 
 
-def test_start_in_doubt_is_true_or_false():
-    for bad in ("false", 0, None):
-        with pytest.raises(ConfigError, match="start_in_doubt must be true or false"):
-            DenseConfig(start_in_doubt=bad)
-    assert DenseConfig(start_in_doubt=False).start_in_doubt is False
+def test_start_in_doubt_and_rival_by_checks_are_true_or_false():
+    for name in ("start_in_doubt", "rival_by_checks"):
+        for bad in ("false", 0, None):
+            with pytest.raises(ConfigError, match=f"{name} must be true or false"):
+                DenseConfig(**{name: bad})
+        assert getattr(DenseConfig(**{name: False}), name) is False

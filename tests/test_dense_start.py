@@ -119,3 +119,51 @@ def test_a_trusted_map_is_not_put_in_competition(figure_pair):
     assert result.check.trusted and result.check.start == "matches"
     assert "rival start" not in result.timings and "landmark check" not in result.timings
     assert max(result.check.verdict.signatures) <= len(matches.alternatives)  # no rank past the matchings
+
+
+def test_the_rival_passes_the_checks_only_by_beating_the_map_on_both():
+    """``rival_by_checks``: orientation at least ``trust_orientation`` and residual at most
+    ``trust_residual`` (a trusted map's), and both better than the map from the matches."""
+    from darcyan.dense.maps import MapCheck, _passes_checks
+    from darcyan.dense.seeds import SeedVerdict
+
+    config = FAST_DENSE
+    verdict = SeedVerdict(0, 1, 0.0, None, {0: 0.0}, True)
+    chosen = MapCheck(0.5, 0.05, verdict, residual=0.010)
+    right = MapCheck(0.8, 0.04, verdict, residual=0.007)
+    assert _passes_checks(right, chosen, config)
+    assert not _passes_checks(dataclasses.replace(right, orientation=config.trust_orientation - 0.01), chosen, config)
+    assert not _passes_checks(dataclasses.replace(right, residual=config.trust_residual + 0.001), chosen, config)
+    assert not _passes_checks(right, dataclasses.replace(chosen, orientation=0.9), config)
+    assert not _passes_checks(right, dataclasses.replace(chosen, residual=0.006), config)
+    assert not _passes_checks(dataclasses.replace(right, residual=np.nan), dataclasses.replace(chosen, residual=np.nan),
+                              config)  # without alignment: never
+
+
+@pytest.mark.slow
+def test_a_rival_the_signature_does_not_choose_is_taken_by_the_checks(figure_pair, monkeypatch):
+    """The wrong matching of the test above, with the start without landmarks scored no better
+    than it (so that the signature does not choose it): its map is made anyway and taken,
+    being right where the matches' map is wholly wrong; with ``rival_by_checks`` off it is not."""
+    import darcyan.dense.maps as maps
+
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    wrong = tip_correspondence(tips, np.roll(tips, -1))
+    real = maps.rival_start
+
+    def tied(*args, **kwargs):
+        rival, _, chosen_score = real(*args, **kwargs)
+        return rival, chosen_score, chosen_score
+
+    monkeypatch.setattr(maps, "rival_start", tied)
+    config = dataclasses.replace(FAST_DENSE, landmarks="all", landmark_contradiction=0.0)
+
+    def rate(result):
+        return evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED,
+                              target_solver=shape_2.solver).rate
+
+    taken = dense_map(shape_1, shape_2, wrong, config)
+    assert taken.check.start == "spectral" and not taken.check.trusted and rate(taken) >= DENSE_MIN_RATE
+    kept = dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, rival_by_checks=False))
+    assert kept.check.start == "matches" and rate(kept) < 0.2

@@ -468,6 +468,13 @@ class DenseConfig:
             ``MapCheck.residual``). A wrong sparse matching (or an alternative that beat a right
             one by a hair) ruins a whole map, and the start without landmarks does not depend on
             it. Costs a clear pair nothing (``docs/decisions/every-pair.md``).
+        rival_by_checks: when the start without landmarks does not score clearly lower
+            (``start_in_doubt``), its map is made anyway and taken when it passes the checks a
+            trusted map passes (orientation agreement at least ``trust_orientation``, residual
+            at most ``trust_residual``) and beats the map from the matches on both. The
+            signature scores a map that keeps a mirrored or misplaced landmark pair almost as
+            well as the right one; its orientation and residual do not
+            (``docs/decisions/every-pair.md``). Costs a map in doubt one more map.
         landmark_contradiction: a ZoomOut map that is not trusted (from the matches, or from
             the landmarks of the start without them) has its landmark pairs checked against each
             other, before the start without landmarks competes and whether or not it does: each
@@ -537,6 +544,7 @@ class DenseConfig:
     start_landmarks: int = 6
     start_checked: int = 4
     start_in_doubt: bool = True
+    rival_by_checks: bool = True
     landmark_contradiction: float = 0.3
 
     def __post_init__(self) -> None:
@@ -559,8 +567,9 @@ class DenseConfig:
                 raise ConfigError(f"dense: {name} must be a positive integer, got {value!r}")
         if self.basis_start > self.basis_size:
             raise ConfigError(f"dense: basis_start ({self.basis_start}) exceeds basis_size ({self.basis_size})")
-        if not isinstance(self.start_in_doubt, bool):
-            raise ConfigError(f"dense: start_in_doubt must be true or false, got {self.start_in_doubt!r}")
+        for name in ("start_in_doubt", "rival_by_checks"):
+            if not isinstance(getattr(self, name), bool):
+                raise ConfigError(f"dense: {name} must be true or false, got {getattr(self, name)!r}")
         for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "signature_until",
                      "basis_margin", "margin_from", "alignment_rounds"):
             value = getattr(self, name)

@@ -177,18 +177,23 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             rival_seed, rival_score, chosen_score = rival
             scores.update({check.seed: chosen_score, rival_seed.rank: rival_score})
             taken = False
-            if rival_score < (1.0 - config.seed_margin) * chosen_score:
+            by_signature = rival_score < (1.0 - config.seed_margin) * chosen_score
+            if by_signature or config.rival_by_checks:
                 choice = dataclasses.replace(choice, seed=rival_seed, seeds=[rival_seed])
                 rival_local, rival_residual = _map_of_seed(shape_1, shape_2, rival_seed, config, choice, say, timings,
                                                            "rival ")
-                # Two judges: the signature chose the rival; its map is taken only when the
-                # alignment also follows it more closely (NaN without alignment: the signature alone).
-                taken = not rival_residual >= residual
-            if taken:
-                local, residual, pairs = rival_local, rival_residual, (rival_seed.source, rival_seed.target)
                 verdict = seed_check(rival_seed.rank, scores, config.seed_margin, rival_seed.start,
                                      rival_seed.start_from, rival_seed.rank)
-                check = _checked(shape_1, local, rival_seed, verdict, residual, correspondence, config)
+                rival_check = _checked(shape_1, rival_local, rival_seed, verdict, rival_residual, correspondence, config)
+                if by_signature:
+                    # Two judges: the signature chose the rival; its map is taken only when the
+                    # alignment also follows it more closely (NaN without alignment: the signature alone).
+                    taken = not rival_residual >= residual
+                else:
+                    taken = _passes_checks(rival_check, check, config)
+            if taken:
+                local, residual, pairs = rival_local, rival_residual, (rival_seed.source, rival_seed.target)
+                check = rival_check
             else:  # the same map: only the verdict gains the rival (a map not trusted stays so)
                 verdict = seed_check(check.seed, scores, config.seed_margin, check.start, check.verdict.start_from,
                                      rival_seed.rank)
@@ -197,6 +202,15 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([shape_1.mesh.input_index[pairs[0]], shape_2.mesh.input_index[pairs[1]]], axis=1)
     return DenseMap(target, landmarks, timings, check)
+
+
+def _passes_checks(rival: MapCheck, chosen: MapCheck, config: DenseConfig) -> bool:
+    """Whether the start without landmarks' map ``rival`` replaces the map from the matches
+    ``chosen`` although the signature did not choose it (``DenseConfig.rival_by_checks``): it
+    passes the orientation and residual conditions of :func:`trusted` and beats ``chosen`` on
+    both (without alignment, NaN residuals: never)."""
+    return (rival.orientation >= config.trust_orientation and rival.residual <= config.trust_residual
+            and rival.orientation > chosen.orientation and rival.residual < chosen.residual)
 
 
 def _without_contradicted(shape_1, shape_2, seed, residual: float, check: MapCheck, correspondence,
