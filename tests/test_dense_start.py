@@ -165,5 +165,9 @@ def test_a_rival_the_signature_does_not_choose_is_taken_by_the_checks(figure_pai
 
     taken = dense_map(shape_1, shape_2, wrong, config)
     assert taken.check.start == "spectral" and not taken.check.trusted and rate(taken) >= DENSE_MIN_RATE
+    assert taken.check.verdict.by_checks and taken.check.as_dict()["by_checks"] is True
+    from darcyan.cli import _seed_verdict
+
+    assert "agrees better with its landmarks' orientation" in _seed_verdict(taken.check.as_dict())
     kept = dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, rival_by_checks=False))
     assert kept.check.start == "matches" and rate(kept) < 0.2

@@ -269,6 +269,11 @@ def _seed_verdict(about: dict) -> str:
     start_from = about.get("start_from", "the spectra")
     close = "" if about["clear"] else "; another candidate scores close: look at the matches (--plot)"
     rival = about.get("rival")
+    if about.get("start") == "spectral" and rival is not None and about.get("by_checks"):
+        return (f"started without the feature matches: the map from the matchings was not trusted, and the map "
+                f"from landmarks of a short map started from {start_from} agrees better with its landmarks' "
+                f"orientation and is followed more closely by the alignment; the feature matches are read from the map"
+                + close)
     if about.get("start") == "spectral" and rival is not None:
         return (f"started without the feature matches: the map from the matchings was not trusted, and landmarks "
                 f"from a short map started from {start_from} keep the shapes' curvature clearly better; the feature "

@@ -191,6 +191,8 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
                     taken = not rival_residual >= residual
                 else:
                     taken = _passes_checks(rival_check, check, config)
+                    if taken:
+                        rival_check = dataclasses.replace(rival_check, verdict=dataclasses.replace(verdict, by_checks=True))
             if taken:
                 local, residual, pairs = rival_local, rival_residual, (rival_seed.source, rival_seed.target)
                 check = rival_check

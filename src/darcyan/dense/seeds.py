@@ -113,6 +113,8 @@ class SeedVerdict:
         left_out: ``(source vertex, target vertex, displacement)`` (input numbering; sqrt(area)
             units) of the landmark pair the others contradicted (:func:`contradicted_landmark`),
             when the map made without it was taken, else ``None``.
+        by_checks: the start without landmarks won by its map's own checks (orientation and
+            residual, ``DenseConfig.rival_by_checks``), not by a clearly lower signature score.
     """
 
     seed: int
@@ -125,11 +127,14 @@ class SeedVerdict:
     start_from: str = ""
     rival: int | None = None
     left_out: tuple | None = None
+    by_checks: bool = False
 
     def as_dict(self) -> dict:
-        """The fields as a dict (``start_from``, ``rival`` and ``left_out`` only when set), as JSON
-        records keep them."""
+        """The fields as a dict (``start_from``, ``rival``, ``left_out`` and ``by_checks`` only when
+        set), as JSON records keep them."""
         fields = dataclasses.asdict(self)
+        if not self.by_checks:
+            del fields["by_checks"]
         if not self.start_from:
             del fields["start_from"]
         if self.rival is None:
