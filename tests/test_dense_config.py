@@ -44,3 +44,12 @@ def test_start_in_doubt_and_rival_by_checks_are_true_or_false():
             with pytest.raises(ConfigError, match=f"{name} must be true or false"):
                 DenseConfig(**{name: bad})
         assert getattr(DenseConfig(**{name: False}), name) is False
+
+
+def test_rival_agreement_is_a_share_and_its_radius_non_negative():
+    for bad in (-0.1, 1.5, "half", True):
+        with pytest.raises(ConfigError, match="rival_agreement must be a share"):
+            DenseConfig(rival_agreement=bad)
+    with pytest.raises(ConfigError, match="rival_agreement_radius must be non-negative"):
+        DenseConfig(rival_agreement_radius=-0.01)
+    assert DenseConfig(rival_agreement=0.0, rival_agreement_radius=0.0).rival_agreement == 0.0

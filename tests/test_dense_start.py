@@ -157,7 +157,9 @@ def test_a_rival_the_signature_does_not_choose_is_taken_by_the_checks(figure_pai
         return rival, chosen_score, chosen_score
 
     monkeypatch.setattr(maps, "rival_start", tied)
-    config = dataclasses.replace(FAST_DENSE, landmarks="all", landmark_contradiction=0.0)
+    # The matches' map is wholly wrong: the rival overturns all of it, which the checks alone may
+    # not decide (rival_agreement); without that guard they do.
+    config = dataclasses.replace(FAST_DENSE, landmarks="all", landmark_contradiction=0.0, rival_agreement=0.0)
 
     def rate(result):
         return evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED,
@@ -171,3 +173,23 @@ def test_a_rival_the_signature_does_not_choose_is_taken_by_the_checks(figure_pai
     assert "agrees better with its landmarks' orientation" in _seed_verdict(taken.check.as_dict())
     kept = dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, rival_by_checks=False))
     assert kept.check.start == "matches" and rate(kept) < 0.2
+    guarded = dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, rival_agreement=0.5))
+    assert guarded.check.start == "matches" and rate(guarded) < 0.2
+
+
+def test_two_maps_agree_where_their_images_lie_within_the_radius():
+    """On a unit disc (area pi: its own sqrt(area) units after preparation), a map moving every
+    vertex by a distance well below the radius agrees with the identity everywhere, one moving
+    it by well above nowhere but near the rim, where the nearest vertex stays close."""
+    from darcyan.dense.maps import map_agreement
+    from darcyan.geometry.knn import nearest_rows
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(synthetic.flat_disc(rings=30))
+    v = shape.mesh.vertices
+    identity = np.arange(shape.mesh.n_vertices)
+    assert map_agreement(shape, shape, identity, identity, 0.05) == pytest.approx(1.0)
+    for shift, low, high in ((0.02, 0.999, 1.0), (0.3, 0.0, 0.05)):
+        moved = nearest_rows(v, v + [shift, 0.0, 0.0])
+        share = map_agreement(shape, shape, identity, moved, 0.05)
+        assert low <= share <= high, (shift, share)

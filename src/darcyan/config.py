@@ -475,6 +475,11 @@ class DenseConfig:
             signature scores a map that keeps a mirrored or misplaced landmark pair almost as
             well as the right one; its orientation and residual do not
             (``docs/decisions/every-pair.md``). Costs a map in doubt one more map.
+        rival_agreement: ... and only when the two maps send at least this share of the
+            source's area to within ``rival_agreement_radius`` of each other: the rule mends a
+            part of a map. A map that turns the whole body round keeps the orientation and
+            residual of a right one, and overturning most of a map is left to the signature.
+        rival_agreement_radius: that distance, in space on the target (sqrt(area) units).
         landmark_contradiction: a ZoomOut map that is not trusted (from the matches, or from
             the landmarks of the start without them) has its landmark pairs checked against each
             other, before the start without landmarks competes and whether or not it does: each
@@ -545,6 +550,8 @@ class DenseConfig:
     start_checked: int = 4
     start_in_doubt: bool = True
     rival_by_checks: bool = True
+    rival_agreement: float = 0.5
+    rival_agreement_radius: float = 0.05
     landmark_contradiction: float = 0.3
 
     def __post_init__(self) -> None:
@@ -591,11 +598,14 @@ class DenseConfig:
         for name in ("consistency", "consistency_floor", "bijectivity", "orthogonality", "landmark_weight",
                      "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns", "signature_turns_partial",
                      "commutativity", "alignment_normal_weight", "alignment_slack", "landmark_tie_weight",
-                     "trust_residual", "landmark_contradiction", "basis_lanczos"):
+                     "trust_residual", "landmark_contradiction", "basis_lanczos", "rival_agreement_radius"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0
                     and math.isfinite(value)):
                 raise ConfigError(f"dense: {name} must be non-negative, got {value!r}")
+        share = self.rival_agreement
+        if not (isinstance(share, (int, float)) and not isinstance(share, bool) and 0 <= share <= 1):
+            raise ConfigError(f"dense: rival_agreement must be a share in [0, 1], got {share!r}")
         length = self.alignment_length
         if not (isinstance(length, (int, float)) and not isinstance(length, bool) and length > 0 and math.isfinite(length)):
             raise ConfigError(f"dense: alignment_length must be a positive length, got {length!r}")

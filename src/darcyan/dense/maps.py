@@ -190,7 +190,9 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
                     # alignment also follows it more closely (NaN without alignment: the signature alone).
                     taken = not rival_residual >= residual
                 else:
-                    taken = _passes_checks(rival_check, check, config)
+                    taken = (_passes_checks(rival_check, check, config)
+                             and map_agreement(shape_1, shape_2, local, rival_local, config.rival_agreement_radius)
+                             >= config.rival_agreement)
                     if taken:
                         rival_check = dataclasses.replace(rival_check, verdict=dataclasses.replace(verdict, by_checks=True))
             if taken:
@@ -204,6 +206,15 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([shape_1.mesh.input_index[pairs[0]], shape_2.mesh.input_index[pairs[1]]], axis=1)
     return DenseMap(target, landmarks, timings, check)
+
+
+def map_agreement(shape_1, shape_2, map_a: np.ndarray, map_b: np.ndarray, radius: float) -> float:
+    """The share of ``shape_1``'s area (mixed Voronoi areas, which sum to 1) whose images under
+    the maps ``map_a`` and ``map_b`` ``(n1,)`` (prepared numbering) lie within ``radius``
+    (sqrt(area) units, in space) of each other on ``shape_2``."""
+    positions = shape_2.mesh.vertices
+    apart = np.linalg.norm(positions[map_a] - positions[map_b], axis=1)
+    return float(shape_1.vertex_areas[apart <= radius].sum())
 
 
 def _passes_checks(rival: MapCheck, chosen: MapCheck, config: DenseConfig) -> bool:
