@@ -103,7 +103,7 @@ def test_the_seed_verdict_says_how_the_map_was_started():
     assert "hold against their alternatives" in _seed_verdict(kept)
     assert "weighed against it and did not score better" in _seed_verdict(kept)
     refused = seed_check(0, {0: 0.10, 1: 0.20, 4: 0.05}, 0.04, rival=4).as_dict()  # scored better, alignment said no
-    assert "the alignment followed its map less closely: not taken" in _seed_verdict(refused)
+    assert "scored better, but its map was not taken (the alignment followed it less closely" in _seed_verdict(refused)
     assert "scores close" not in _seed_verdict(refused)
     alone = seed_check(0, {0: 0.10, 1: 0.101}, 0.04, rival=1).as_dict()  # one matching and the rival
     assert _seed_verdict(alone).startswith("the feature matches, no alternative matching to weigh them against; "
@@ -112,6 +112,14 @@ def test_the_seed_verdict_says_how_the_map_was_started():
     assert "the map from the matchings was not trusted" in _seed_verdict(taken) and "axes ++" in _seed_verdict(taken)
     fallback = seed_check(2, {2: 0.05}, 0.04, "spectral", "spectral +-+-").as_dict()
     assert "fewer than 3 consistent ones" in _seed_verdict(fallback) and "rival" not in fallback
+    assert "by_checks" not in taken and "by_checks" not in kept  # recorded only when true
+    import dataclasses
+
+    checked = dataclasses.replace(seed_check(4, {0: 0.10, 1: 0.20, 4: 0.12}, 0.04, "spectral", "axes ++", rival=4),
+                                  by_checks=True).as_dict()  # its signature no better: taken by its map's checks
+    said = _seed_verdict(checked)
+    assert checked["by_checks"] is True and "agrees better with its landmarks' orientation" in said
+    assert "clearly better" not in said and "scores close" not in said
 
 
 def test_the_seed_verdict_names_a_landmark_pair_left_out():

@@ -91,6 +91,7 @@ def test_a_wrong_matching_gives_way_to_the_start_without_landmarks(figure_pair):
     assert result.check.start == "spectral" and "rival start" in result.timings
     verdict = result.check.verdict
     assert verdict.seed == verdict.rival == 1 and set(verdict.signatures) == {0, 1}
+    assert not verdict.by_checks  # taken by its signature
     assert rate(result) >= DENSE_MIN_RATE
     alone = dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, start_in_doubt=False, landmark_contradiction=0.0))
     assert alone.check.start == "matches" and not alone.check.trusted and rate(alone) < 0.2
@@ -133,7 +134,9 @@ def test_the_rival_passes_the_checks_only_by_beating_the_map_on_both():
     right = MapCheck(0.8, 0.04, verdict, residual=0.007)
     assert _passes_checks(right, chosen, config)
     assert not _passes_checks(dataclasses.replace(right, orientation=config.trust_orientation - 0.01), chosen, config)
-    assert not _passes_checks(dataclasses.replace(right, residual=config.trust_residual + 0.001), chosen, config)
+    # above the trust's ceiling, though below the chosen map's: refused by the ceiling alone
+    assert not _passes_checks(dataclasses.replace(right, residual=config.trust_residual + 0.001),
+                              dataclasses.replace(chosen, residual=config.trust_residual + 0.01), config)
     assert not _passes_checks(right, dataclasses.replace(chosen, orientation=0.9), config)
     assert not _passes_checks(right, dataclasses.replace(chosen, residual=0.006), config)
     assert not _passes_checks(dataclasses.replace(right, residual=np.nan), dataclasses.replace(chosen, residual=np.nan),

@@ -26,6 +26,7 @@ from .method.pipeline import (
     analyze_shape,
     describe_and_prepare,
     describe_keeping_first,
+    describe_shapes,
     load_shape,
     match_shapes,
 )
@@ -212,7 +213,8 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
     # A mesh given in memory is prepared once, for its description and everything after.
     prepared: dict = {i: (item if isinstance(item, Shape) else prepare_shape(item, config, repair))
                       for i, item in enumerate(inputs) if isinstance(item, (Mesh, Shape))}
-    descriptions = _describe(inputs, prepared, config, repair, store, jobs, dense_config if dense else None)
+    descriptions = _describe(inputs, prepared, config, repair, store, jobs, dense_config if dense else None,
+                             keep_source=verify is not False)
     say(f"described {len(descriptions)} shapes")
     names = [_name(item) for item in inputs]
 
@@ -287,13 +289,13 @@ def _name(item) -> str:
 
 
 def _describe(inputs: list, prepared: dict, config: DarcyanConfig, repair: bool, store, jobs: int,
-              dense_config: DenseConfig | None = None) -> list:
+              dense_config: DenseConfig | None = None, keep_source: bool = True) -> list:
     """The descriptions of ``inputs``: the files together (cache, workers), the shapes given in
     memory from their ``prepared`` shapes. With ``dense_config`` (a dense map to follow), the
     files' shapes are prepared beside their descriptions, with what the map needs of each alone
-    (:func:`~darcyan.dense.maps.shape_operators`), and join ``prepared``. Without it, the
-    source's shape joins ``prepared`` when this process prepared it beside the workers
-    (:func:`~darcyan.method.pipeline.describe_keeping_first`)."""
+    (:func:`~darcyan.dense.maps.shape_operators`), and join ``prepared``. Without it, with
+    ``keep_source`` (a verification may follow), the source's shape joins ``prepared`` when this
+    process prepared it beside the workers (:func:`~darcyan.method.pipeline.describe_keeping_first`)."""
     files = [i for i, item in enumerate(inputs) if isinstance(item, (str, os.PathLike))]
     sources = [inputs[i] for i in files]
     described = {}
@@ -304,7 +306,10 @@ def _describe(inputs: list, prepared: dict, config: DarcyanConfig, repair: bool,
         described.update({i: description for i, (description, _) in zip(files, both)})
         prepared.update({i: shape for i, (_, shape) in zip(files, both)})
     else:
-        descriptions, first = describe_keeping_first(sources, config, repair, store, jobs)
+        if keep_source:
+            descriptions, first = describe_keeping_first(sources, config, repair, store, jobs)
+        else:
+            descriptions, first = describe_shapes(sources, config, repair, store, jobs), None
         described.update(zip(files, descriptions))
         if first is not None and files[0] == 0:  # the source, prepared here: a verification reuses it
             prepared[0] = first

@@ -272,8 +272,8 @@ def _seed_verdict(about: dict) -> str:
     if about.get("start") == "spectral" and rival is not None and about.get("by_checks"):
         return (f"started without the feature matches: the map from the matchings was not trusted, and the map "
                 f"from landmarks of a short map started from {start_from} agrees better with its landmarks' "
-                f"orientation and is followed more closely by the alignment; the feature matches are read from the map"
-                + close)
+                f"orientation and is followed more closely by the alignment (its signature scored no better); the "
+                f"feature matches are read from the map")
     if about.get("start") == "spectral" and rival is not None:
         return (f"started without the feature matches: the map from the matchings was not trusted, and landmarks "
                 f"from a short map started from {start_from} keep the shapes' curvature clearly better; the feature "
@@ -285,9 +285,9 @@ def _seed_verdict(about: dict) -> str:
     if rival is not None:
         signatures = about["signatures"]
         rival_score = signatures.get(rival, signatures.get(str(rival)))  # JSON records key ranks by strings
-        if rival_score is not None and rival_score < about["signature"]:  # it scored better: refused by the alignment
-            lost, close = ("; a start without the feature matches scored better, but the alignment followed its map "
-                           "less closely: not taken"), ""
+        if rival_score is not None and rival_score < about["signature"]:  # it scored better, its map refused
+            lost, close = ("; a start without the feature matches scored better, but its map was not taken (the "
+                           "alignment followed it less closely, or its own checks did not beat this map's)"), ""
         else:
             lost = "; a start without the feature matches was weighed against it and did not score better"
     left_out = about.get("left_out")

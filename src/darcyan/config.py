@@ -474,11 +474,13 @@ class DenseConfig:
             at most ``trust_residual``) and beats the map from the matches on both. The
             signature scores a map that keeps a mirrored or misplaced landmark pair almost as
             well as the right one; its orientation and residual do not
-            (``docs/decisions/every-pair.md``). Costs a map in doubt one more map.
-        rival_agreement: ... and only when the two maps send at least this share of the
-            source's area to within ``rival_agreement_radius`` of each other: the rule mends a
-            part of a map. A map that turns the whole body round keeps the orientation and
-            residual of a right one, and overturning most of a map is left to the signature.
+            (``docs/decisions/every-pair.md``). Costs a map in doubt one more map, when the
+            signature did not already choose the start.
+        rival_agreement: the start's map is taken by ``rival_by_checks`` only when it and the
+            first map send at least this share of the source's area to within
+            ``rival_agreement_radius`` of each other: the rule mends a part of a map. A map that
+            turns the whole body round keeps the orientation and residual of a right one, and
+            overturning most of a map is left to the signature.
         rival_agreement_radius: that distance, in space on the target (sqrt(area) units).
         landmark_contradiction: a ZoomOut map that is not trusted (from the matches, or from
             the landmarks of the start without them) has its landmark pairs checked against each

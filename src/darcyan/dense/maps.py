@@ -9,7 +9,8 @@
    matches (or from that start) is not trusted, a landmark pair the others contradict is left
    out (``DenseConfig.landmark_contradiction``), then that start competes with its seed, scored
    alike, and its map is taken when it scores clearly better and the alignment follows it more
-   closely (``DenseConfig.start_in_doubt``);
+   closely (``DenseConfig.start_in_doubt``), or else when its own checks beat the first map's
+   and the two maps agree on half the surface (``DenseConfig.rival_by_checks``);
 2. its landmarks (:mod:`darcyan.dense.landmarks`): the consistent matches, and each vertex's
    distances to them and their turns, whose nearest neighbours on the other shape give the
    first maps in both directions;
@@ -209,12 +210,13 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
 
 
 def map_agreement(shape_1, shape_2, map_a: np.ndarray, map_b: np.ndarray, radius: float) -> float:
-    """The share of ``shape_1``'s area (mixed Voronoi areas, which sum to 1) whose images under
-    the maps ``map_a`` and ``map_b`` ``(n1,)`` (prepared numbering) lie within ``radius``
-    (sqrt(area) units, in space) of each other on ``shape_2``."""
+    """The share of ``shape_1``'s area (its mixed Voronoi areas) whose images under the maps
+    ``map_a`` and ``map_b`` ``(n1,)`` (prepared numbering) lie within ``radius`` (sqrt(area)
+    units, in space) of each other on ``shape_2``."""
     positions = shape_2.mesh.vertices
     apart = np.linalg.norm(positions[map_a] - positions[map_b], axis=1)
-    return float(shape_1.vertex_areas[apart <= radius].sum())
+    area = shape_1.vertex_areas
+    return float(area[apart <= radius].sum() / area.sum())
 
 
 def _passes_checks(rival: MapCheck, chosen: MapCheck, config: DenseConfig) -> bool:
