@@ -127,3 +127,24 @@ def test_a_verification_reuses_the_source_prepared_beside_the_workers(small_pose
     assert reused.verification["seed"] == again.verification["seed"]
     np.testing.assert_array_equal(reused.matches.source_vertex, again.matches.source_vertex)
     np.testing.assert_array_equal(reused.matches.target_vertex, again.matches.target_vertex)
+
+
+@pytest.mark.slow
+def test_the_source_is_kept_only_when_described_here(small_pose_files, tmp_path):
+    """describe_keeping_first keeps the first file's shape only when this process prepared it:
+    not when its description comes from the cache, nor when every file goes to a worker
+    (more files than jobs), nor when the files are described in turn (one job)."""
+    from darcyan.io.cache import ShapeCache
+    from darcyan.method.pipeline import describe_keeping_first
+
+    a, b = small_pose_files
+    c = tmp_path / "third.off"
+    c.write_bytes(b.read_bytes())
+    config = darcyan.DarcyanConfig()
+    descriptions, kept = describe_keeping_first([a, b], config, jobs=2)
+    assert kept is not None and kept.mesh.n_vertices > 0 and len(descriptions) == 2
+    assert describe_keeping_first([a, b, c], config, jobs=2)[1] is None  # three files, two jobs: all in workers
+    assert describe_keeping_first([a, b], config, jobs=1)[1] is None
+    cache = ShapeCache(tmp_path / "cache")
+    describe_keeping_first([a], config, cache=cache)
+    assert describe_keeping_first([a, b, c], config, cache=cache, jobs=2)[1] is None  # a from the cache

@@ -392,7 +392,7 @@ def _describe_files(paths: list, keys: list, results: list, config: DarcyanConfi
     the work spread over processes by :func:`_across_processes`, the new descriptions saved
     under ``keys``."""
     run = [i for i, described in enumerate(results) if keep_shapes or described is None]
-    here = jobs <= 1 or len(run) <= jobs  # _across_processes runs the first task in this process
+    here = _first_runs_here(len(run), jobs)
     # A known description travels as its feature points alone: all that extra reads of it.
     tasks = [(paths[i], config, repair, None if results[i] is None else results[i].feature_vertices,
               keep_shapes or (keep_first and here and i == 0), extra) for i in run]
@@ -408,13 +408,18 @@ def _describe_files(paths: list, keys: list, results: list, config: DarcyanConfi
     return list(zip(results, shapes))
 
 
+def _first_runs_here(tasks: int, jobs: int) -> bool:
+    """Whether :func:`_across_processes` runs the first of ``tasks`` tasks in this process."""
+    return jobs <= 1 or tasks <= jobs
+
+
 def _across_processes(function, tasks: list, jobs: int) -> list:
     """``[function(task) for task in tasks]`` in order: here with ``jobs`` 1 or a single task;
     this process beside workers when the tasks fit in ``jobs`` (:func:`_beside_workers`); else
-    in ``jobs`` worker processes."""
+    in ``jobs`` worker processes (:func:`_first_runs_here` tells which)."""
     if jobs <= 1 or len(tasks) <= 1:
         return [function(task) for task in tasks]
-    if len(tasks) <= jobs:
+    if _first_runs_here(len(tasks), jobs):
         return _beside_workers(function, tasks)
     import scipy.sparse.csgraph  # noqa: F401  (imported lazily by the mesh checks: once, before the workers fork)
 
