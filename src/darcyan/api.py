@@ -26,7 +26,6 @@ from .method.pipeline import (
     analyze_shape,
     describe_and_prepare,
     describe_keeping_first,
-    describe_shapes,
     load_shape,
     match_shapes,
 )
@@ -306,12 +305,9 @@ def _describe(inputs: list, prepared: dict, config: DarcyanConfig, repair: bool,
         described.update({i: description for i, (description, _) in zip(files, both)})
         prepared.update({i: shape for i, (_, shape) in zip(files, both)})
     else:
-        if keep_source:
-            descriptions, first = describe_keeping_first(sources, config, repair, store, jobs)
-        else:
-            descriptions, first = describe_shapes(sources, config, repair, store, jobs), None
+        descriptions, first = describe_keeping_first(sources, config, repair, store, jobs)
         described.update(zip(files, descriptions))
-        if first is not None and files[0] == 0:  # the source, prepared here: a verification reuses it
+        if keep_source and first is not None and files[0] == 0:  # the source, prepared here: a verification reuses it
             prepared[0] = first
     return [described[i] for i in range(len(inputs))]
 

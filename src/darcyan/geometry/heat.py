@@ -12,18 +12,18 @@ from .mesh import Mesh
 from .operators import mixed_voronoi_area
 
 
-def heat_diffuse(mesh: Mesh, values: np.ndarray, length: float, area: np.ndarray | None = None,
-                 steps: int = HeatKernel().diffusion_steps, laplacian=None) -> np.ndarray:
+def heat_diffuse(mesh: Mesh, values: np.ndarray, length: float,
+                 steps: int = HeatKernel().diffusion_steps) -> np.ndarray:
     """Diffuse ``values (n,)`` for the time that spreads heat over about ``length``: ``steps``
-    backward Euler steps of du/dt = Laplace(u) with total time length**2 / 2 (one factorization).
-    ``area`` (mixed Voronoi) and ``laplacian`` (cotangent): the mesh's own by default (kept on it)."""
+    backward Euler steps of du/dt = Laplace(u) with total time length**2 / 2 (one factorization),
+    on the mesh's mixed Voronoi areas and cotangent Laplacian (kept on it: computed once)."""
     import scipy.sparse as sp
     from scipy.sparse.linalg import splu
 
     from .operators import cotangent_laplacian
 
-    area = mixed_voronoi_area(mesh) if area is None else area
-    laplacian = cotangent_laplacian(mesh) if laplacian is None else laplacian
+    area = mixed_voronoi_area(mesh)
+    laplacian = cotangent_laplacian(mesh)
     step = length**2 / 2 / steps
     mass = sp.diags(area)
     solve = splu((mass - step * laplacian).tocsc()).solve
@@ -57,7 +57,7 @@ def curvature_signature(mesh, mean_curvature: np.ndarray, lengths=MirrorTest().s
     known = {} if known is None else known
     for length in lengths:
         if length not in known:
-            c = heat_diffuse(mesh, mean_curvature, length, steps=diffusion_steps)  # the mesh keeps its operators
+            c = heat_diffuse(mesh, mean_curvature, length, diffusion_steps)
             known[length] = c / max(float(np.abs(c).mean()), 1e-12)
     return np.stack([known[length] for length in lengths], axis=1)
 

@@ -86,7 +86,7 @@ def average_geodesic_distance(mesh: Mesh, solver: GeodesicSolver, sources: int, 
     cell_area = np.bincount(owner, weights=area, minlength=len(src))
     values = (cell_area[:, None] * fields).sum(axis=0) / cell_area.sum()
     if smoothing > 0:
-        values = heat_diffuse(mesh, values, smoothing, area, diffusion_steps)
+        values = heat_diffuse(mesh, values, smoothing, diffusion_steps)
     return AGD(values, src)
 
 

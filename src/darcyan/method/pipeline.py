@@ -224,8 +224,7 @@ def analyze_shape(shape: Shape, config: DarcyanConfig = DarcyanConfig(), progres
         coarse = average_geodesic_distance(proxy.mesh, proxy.solver, config.agd_sources)
         values = proxy.to_full(coarse.values)
         if config.agd_smoothing > 0:
-            values = heat_diffuse(normalized, values, config.agd_smoothing, curvatures.area, config.heat.diffusion_steps,
-                                  shape.laplacian)
+            values = heat_diffuse(normalized, values, config.agd_smoothing, config.heat.diffusion_steps)
         agd = AGD(values, coarse.sources)
     done("agd")
     stage("features")
@@ -348,7 +347,7 @@ def describe_keeping_first(sources: list, config: DarcyanConfig = DarcyanConfig(
     :class:`~darcyan.geometry.shape.Shape` when this process prepared it anyway, beside workers
     describing the others (``None`` otherwise: its description came from the cache, or was made
     in turn or in a worker). Kept at no cost, so that a verification of the first file's matches
-    (``darcyan match``'s source) does not prepare it again: 0.3-1 s of a 52k pair in doubt."""
+    (``darcyan match``'s source) does not prepare it again (0.3 s of a 52k pair in doubt)."""
     return _descriptions(sources, config, repair, cache, jobs, keep_first=True)
 
 
