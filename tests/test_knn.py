@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from darcyan.geometry.knn import KDTREE_MAX_DIM, nearest_neighbours, nearest_points, nearest_rows
+from darcyan.geometry.knn import KDTREE_MAX_DIM, NearestPoints, nearest_neighbours, nearest_points, nearest_rows
 
 
 @pytest.mark.parametrize("dim", [3, 8, 11])
@@ -26,6 +26,23 @@ def test_nearest_points_breaks_ties_by_the_smallest_index():
     points = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 5.0], [0.0, 0.0]])
     queries = np.array([[1.0, 0.0], [0.1, 0.0], [0.0, 0.0]])  # 0 and 1 tie; 0 and 3 coincide
     np.testing.assert_array_equal(nearest_points(points, queries), [0, 0, 0])
+
+
+def test_prepared_search_equals_a_kd_tree_for_every_set_of_queries():
+    from scipy.spatial import cKDTree
+
+    rng = np.random.default_rng(5)
+    points = (20.0 + rng.random((2000, 9))).astype(np.float32)
+    search = NearestPoints(points)  # prepared once, then searched with several sets of queries
+    tree = cKDTree(points)
+    for size in (1, 63, 64, 65, 400):
+        queries = (20.0 + rng.random((size, 9))).astype(np.float32)
+        found = search(queries)
+        distance = np.linalg.norm(queries.astype(np.float64) - points[found].astype(np.float64), axis=1)
+        np.testing.assert_array_equal(distance, tree.query(queries)[0])
+    ties = NearestPoints(np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 0.0]]))
+    np.testing.assert_array_equal(ties(np.array([[1.0, 0.0], [0.0, 0.0]])), [0, 0])
+    np.testing.assert_array_equal(search(np.zeros((0, 9))), np.zeros(0, np.int64))
 
 
 def test_nearest_neighbours_equal_a_kd_tree():

@@ -48,48 +48,62 @@ def nearest_points(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
     queries, about 2x a k-d tree's time here); a query whose runner-up lies within the product's
     rounding of its minimum is settled by measuring ``|p - q|^2`` directly. The blocks of a large
     search (``THREADED_SEARCH_MIN``) run on :func:`~darcyan.parallel.own_threads` threads.
+    Several searches among the same points: :class:`NearestPoints`.
     """
-    from ..parallel import map_blocks
+    return NearestPoints(points)(queries)
 
-    points = np.asarray(points, dtype=np.float64)
-    queries = np.asarray(queries, dtype=np.float64)
-    centre = points.mean(axis=0)  # centred, the products' rounding is smaller
-    p = points - centre
-    p_sq = np.einsum("ij,ij->i", p, p)
-    right = np.vstack([p.T, p_sq])  # (d + 1, n): [-2 q, 1] @ right = |p|^2 - 2 q.p
-    reach = float(np.sqrt(p_sq.max(initial=0.0)))
-    unit = SCREEN_SLACK * (points.shape[1] + 3) * float(np.finfo(np.float64).eps)
-    out = np.empty(len(queries), np.int64)
-    scratch = threading.local()  # each thread's block of distances, reused: no fresh pages per block
 
-    def search(start: int) -> None:  # the same blocks whatever the threads: the same bits
-        q = queries[start:start + QUERY_BLOCK]
-        if getattr(scratch, "block", None) is None:
-            scratch.block = np.empty((min(QUERY_BLOCK, len(queries)), len(points)))
-        qc = q - centre
-        rows = np.arange(len(q))
-        screened = np.matmul(np.hstack([-2.0 * qc, np.ones((len(q), 1))]), right, out=scratch.block[:len(q)])
-        best = screened.argmin(axis=1)
-        low = screened[rows, best].copy()
-        tolerance = unit * (np.linalg.norm(qc, axis=1) + reach) ** 2
-        screened[rows, best] = np.inf
-        unsure = np.flatnonzero(screened.min(axis=1) <= low + tolerance)
-        screened[rows, best] = low
-        out[start:start + len(q)] = best
-        if len(unsure):
-            r, c = np.nonzero(screened[unsure] <= (low + tolerance)[unsure, None])
-            exact = ((q[unsure[r]] - points[c]) ** 2).sum(axis=1)
-            order = np.lexsort((c, exact, r))  # per query: smallest distance, then smallest index
-            first = order[np.r_[True, r[order][1:] != r[order][:-1]]]
-            out[start + unsure[r[first]]] = c[first]
+class NearestPoints:
+    """:func:`nearest_points` among one set of ``points`` ``(n, d)``, prepared once (centred,
+    their squared norms folded into the product's right factor) for several sets of queries:
+    the same indices, bit for bit, as :func:`nearest_points` of each."""
 
-    blocks = list(range(0, len(queries), QUERY_BLOCK))
-    if len(queries) * len(points) < THREADED_SEARCH_MIN:
-        for start in blocks:
-            search(start)
-    else:
-        map_blocks(search, blocks)
-    return out
+    def __init__(self, points: np.ndarray):
+        self.points = np.asarray(points, dtype=np.float64)
+        self.centre = self.points.mean(axis=0)  # centred, the products' rounding is smaller
+        p = self.points - self.centre
+        p_sq = np.einsum("ij,ij->i", p, p)
+        self.right = np.vstack([p.T, p_sq])  # (d + 1, n): [-2 q, 1] @ right = |p|^2 - 2 q.p
+        self.reach = float(np.sqrt(p_sq.max(initial=0.0)))
+        self.unit = SCREEN_SLACK * (self.points.shape[1] + 3) * float(np.finfo(np.float64).eps)
+
+    def __call__(self, queries: np.ndarray) -> np.ndarray:
+        """``(q,)`` index of the nearest point to each row of ``queries`` ``(q, d)``."""
+        from ..parallel import map_blocks
+
+        points, centre, right, reach, unit = self.points, self.centre, self.right, self.reach, self.unit
+        queries = np.asarray(queries, dtype=np.float64)
+        out = np.empty(len(queries), np.int64)
+        scratch = threading.local()  # each thread's block of distances, reused: no fresh pages per block
+
+        def search(start: int) -> None:  # the same blocks whatever the threads: the same bits
+            q = queries[start:start + QUERY_BLOCK]
+            if getattr(scratch, "block", None) is None:
+                scratch.block = np.empty((min(QUERY_BLOCK, len(queries)), len(points)))
+            qc = q - centre
+            rows = np.arange(len(q))
+            screened = np.matmul(np.hstack([-2.0 * qc, np.ones((len(q), 1))]), right, out=scratch.block[:len(q)])
+            best = screened.argmin(axis=1)
+            low = screened[rows, best].copy()
+            tolerance = unit * (np.linalg.norm(qc, axis=1) + reach) ** 2
+            screened[rows, best] = np.inf
+            unsure = np.flatnonzero(screened.min(axis=1) <= low + tolerance)
+            screened[rows, best] = low
+            out[start:start + len(q)] = best
+            if len(unsure):
+                r, c = np.nonzero(screened[unsure] <= (low + tolerance)[unsure, None])
+                exact = ((q[unsure[r]] - points[c]) ** 2).sum(axis=1)
+                order = np.lexsort((c, exact, r))  # per query: smallest distance, then smallest index
+                first = order[np.r_[True, r[order][1:] != r[order][:-1]]]
+                out[start + unsure[r[first]]] = c[first]
+
+        blocks = list(range(0, len(queries), QUERY_BLOCK))
+        if len(queries) * len(points) < THREADED_SEARCH_MIN:
+            for start in blocks:
+                search(start)
+        else:
+            map_blocks(search, blocks)
+        return out
 
 
 def nearest_neighbours(points: np.ndarray, k: int) -> np.ndarray:

@@ -21,12 +21,13 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from ..config import MirrorTest
 from ..geometry.heat import curvature_signature, shape_signature  # noqa: F401 (darcyan.method.symmetry.*)
-from ..geometry.knn import nearest_neighbours, nearest_points
+from ..geometry.knn import NearestPoints, nearest_neighbours
 from ..geometry.sampling import sample_vertices
 
 # The test's settings (sample counts, weights, the handedness levels, ...) are DarcyanConfig.mirror:
@@ -167,6 +168,18 @@ class MirrorTestPoints:
     sines: np.ndarray
     rounds: np.ndarray
 
+    @cached_property
+    def triangles(self) -> tuple:
+        """``(p, q, r)`` every test triangle (:func:`_triangles`), made once for every matching."""
+        return _triangles(self.neighbours)
+
+    @cached_property
+    def ready(self) -> np.ndarray:
+        """``(s * k (k - 1) / 2,)`` the round in which each triangle votes: the round that finds
+        the last of its three corners' images."""
+        p, q, r = self.triangles
+        return np.maximum(self.rounds[p], np.maximum(self.rounds[q], self.rounds[r]))
+
 
 def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface,
                        test: MirrorTest = MirrorTest()) -> MirrorTestPoints:
@@ -219,21 +232,21 @@ def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface
         return 0.0
     if points is None:
         points = mirror_test_points(surface_1, surface_2, test)
-    samples, targets, near = points.samples, points.targets, points.neighbours
-    embed_1 = surface_1.landmark_distances[landmarks_1][:, samples].T  # (s, m)
-    embed_2 = surface_2.landmark_distances[landmarks_2][:, targets].T  # (t, m)
+    samples, targets = points.samples, points.targets
+    embed_1 = surface_1.landmark_distances[np.ix_(landmarks_1, samples)].T  # (s, m)
+    embed_2 = surface_2.landmark_distances[np.ix_(landmarks_2, targets)].T  # (t, m)
     if surface_1.signature is not None and surface_2.signature is not None:
         embed_1 = np.hstack([embed_1, test.signature_weight * surface_1.signature[samples]])
         embed_2 = np.hstack([embed_2, test.signature_weight * surface_2.signature[targets]])
-    # Every triangle (sample, two of its neighbours); on shape 1 they were measured once. A
-    # triangle votes in the round that finds the last of its three corners' images.
-    p, q, r = _triangles(near)
-    ready = np.maximum(points.rounds[p], np.maximum(points.rounds[q], points.rounds[r]))
+    nearest_image = NearestPoints(embed_2)  # searched in every round
+    # Every triangle (sample, two of its neighbours); on shape 1 they were measured once.
+    p, q, r = points.triangles
+    ready = points.ready
     image = np.zeros(len(samples), np.int64)  # each sample's image on shape 2 (found in rounds)
     votes = counted = 0  # sums of the votes (+1 kept, -1 reversed) and of the triangles that voted
     for now in range(int(points.rounds.max(initial=-1)) + 1):
         found = np.flatnonzero(points.rounds == now)
-        image[found] = targets[nearest_points(embed_2, embed_1[found])]
+        image[found] = targets[nearest_image(embed_1[found])]
         voting = np.flatnonzero(ready == now)
         tp, tq, tr = p[voting], q[voting], r[voting]
         s1 = points.sines[voting]
