@@ -56,7 +56,9 @@ def nearest_points(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
 class NearestPoints:
     """:func:`nearest_points` among one set of ``points`` ``(n, d)``, prepared once (centred,
     their squared norms folded into the product's right factor) for several sets of queries:
-    the same indices, bit for bit, as :func:`nearest_points` of each."""
+    the same indices as :func:`nearest_points` of each, by the same arithmetic. A float64
+    ``points`` array is kept, not copied: changed afterwards, it no longer matches what was
+    prepared."""
 
     def __init__(self, points: np.ndarray):
         self.points = np.asarray(points, dtype=np.float64)

@@ -233,8 +233,9 @@ def orientation_agreement(surface_1: OrientedSurface, surface_2: OrientedSurface
     if points is None:
         points = mirror_test_points(surface_1, surface_2, test)
     samples, targets = points.samples, points.targets
-    embed_1 = surface_1.landmark_distances[np.ix_(landmarks_1, samples)].T  # (s, m)
-    embed_2 = surface_2.landmark_distances[np.ix_(landmarks_2, targets)].T  # (t, m)
+    # (s, m) and (t, m), row-major as the searches' sums expect (the same bits in every layout)
+    embed_1 = np.ascontiguousarray(surface_1.landmark_distances[np.ix_(landmarks_1, samples)].T)
+    embed_2 = np.ascontiguousarray(surface_2.landmark_distances[np.ix_(landmarks_2, targets)].T)
     if surface_1.signature is not None and surface_2.signature is not None:
         embed_1 = np.hstack([embed_1, test.signature_weight * surface_1.signature[samples]])
         embed_2 = np.hstack([embed_2, test.signature_weight * surface_2.signature[targets]])
