@@ -2,7 +2,8 @@
 
 - :func:`nearest_points`: numpy only (a cached match imports no scipy), float64, exact with
   ties broken by the smallest index; for the few thousand points of the mirror test, and a
-  small mesh's searches in few dimensions.
+  small mesh's searches in few dimensions; :class:`NearestPoints`, the same search prepared once
+  for several sets of queries (the mirror test's rounds).
 - :func:`nearest_neighbours`: each point's k nearest others among a few hundred points.
 - :func:`nearest_rows`: any size; in few dimensions :func:`nearest_points` for small sets, else a
   k-d tree (scipy); blocked single-precision brute force in many (spectral embeddings of dense
