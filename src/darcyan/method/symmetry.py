@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 
@@ -160,6 +159,10 @@ class MirrorTestPoints:
         rounds: ``(s,)`` the round (0, 1, ...) in which :func:`orientation_agreement` looks
             for each sample's image: the samples in slabs along shape 1's longest axis, so
             that most triangles are complete, and vote, before the last round.
+        triangles: ``(p, q, r)``, each ``(s * k (k - 1) / 2,)``: every test triangle (a sample,
+            two of its neighbours) as positions in ``samples``, in the order of ``sines``.
+        ready: ``(s * k (k - 1) / 2,)`` the round in which each triangle votes: the round that
+            finds the last of its three corners' images.
     """
 
     samples: np.ndarray
@@ -167,18 +170,8 @@ class MirrorTestPoints:
     neighbours: np.ndarray
     sines: np.ndarray
     rounds: np.ndarray
-
-    @cached_property
-    def triangles(self) -> tuple:
-        """``(p, q, r)`` every test triangle (:func:`_triangles`), made once for every matching."""
-        return _triangles(self.neighbours)
-
-    @cached_property
-    def ready(self) -> np.ndarray:
-        """``(s * k (k - 1) / 2,)`` the round in which each triangle votes: the round that finds
-        the last of its three corners' images."""
-        p, q, r = self.triangles
-        return np.maximum(self.rounds[p], np.maximum(self.rounds[q], self.rounds[r]))
+    triangles: tuple
+    ready: np.ndarray
 
 
 def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface,
@@ -204,7 +197,8 @@ def mirror_test_points(surface_1: OrientedSurface, surface_2: OrientedSurface,
     along = position @ np.linalg.eigh(position.T @ position)[1][:, -1]
     rounds = np.empty(len(drawn), np.int64)
     rounds[np.argsort(along, kind="stable")] = np.arange(len(drawn)) * AGREEMENT_ROUNDS // len(drawn)
-    return MirrorTestPoints(drawn, targets, near, sines, rounds)
+    ready = np.maximum(rounds[p], np.maximum(rounds[q], rounds[r]))
+    return MirrorTestPoints(drawn, targets, near, sines, rounds, (p, q, r), ready)
 
 
 def _triangles(near: np.ndarray) -> tuple:
