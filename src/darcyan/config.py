@@ -95,6 +95,18 @@ class Repairing:
             and, by changing ZoomOut's random samples, cost michael0 -> michael10's dense map 10
             points (``docs/decisions/``, "Small holes"). Anything ``rims.min_length`` (0.1) or
             longer may be a cut's rim and stays open. 0: no hole is closed.
+        handle_length: with or without repair, a handle (the surface has genus above 0) around
+            which a loop shorter than this (sqrt(area)) runs is cut open along the shortest such
+            loop, with a note (:func:`darcyan.geometry.repair.cut_handles`). A body is a sphere;
+            a handle on one is where parts that touch were joined (a hand glued to a hip,
+            fingers fused by a marching-cubes reconstruction), and it changes the geodesics and
+            the eigenfunctions far beyond itself. 0 (the default): no handle is cut, since on
+            the glued and marching-cubes copies cutting mended some maps and broke as many
+            (``docs/decisions/every-pair.md``, "Handles cut open"); 0.05 cuts the bridges of
+            fused fingers and of a hand touching a hip, not a limb.
+        handle_roots: the farthest points from which the loops around handles are sought
+            (:class:`darcyan.geometry.handles.HandleLoops`; then again from the shortest loop's
+            own vertices); 0: no handle is cut.
     """
 
     weld_tolerance: float = _stage(1e-6, PREPARE)
@@ -103,11 +115,14 @@ class Repairing:
     outward_cap_share: float = _stage(0.25, PREPARE)
     hole_length: float = _stage(0.1, PREPARE)
     hole_edges: int = _stage(4, PREPARE)
+    handle_length: float = _stage(0.0, PREPARE)
+    handle_roots: int = _stage(40, PREPARE)
 
     def __post_init__(self) -> None:
         _check(self, ("weld_tolerance", "degenerate_area"), lambda v: _number(v) and 0 <= v < 1, "in [0, 1)")
-        _check(self, ("outward_cap_share", "hole_length"), lambda v: _number(v) and v >= 0, "non-negative")
-        _check(self, ("hole_edges",), lambda v: _integer(v) and v >= 0, "a non-negative integer")
+        _check(self, ("outward_cap_share", "hole_length", "handle_length"), lambda v: _number(v) and v >= 0,
+               "non-negative")
+        _check(self, ("hole_edges", "handle_roots"), lambda v: _integer(v) and v >= 0, "a non-negative integer")
         _check(self, ("strict",), lambda v: isinstance(v, bool), "true or false")
 
 

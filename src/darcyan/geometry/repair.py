@@ -170,6 +170,14 @@ def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairi
             mesh, cut = _cut_where_orientations_disagree(mesh)
             changes.append(f"dropped {cut} faces along edges where no choice of face orientations agrees "
                            f"(the surface as given is not orientable: a Moebius strip, or faces folded over)")
+    mesh, cut_lengths, handles_left = cut_handles(mesh, settings.handle_length, settings.handle_roots)
+    if cut_lengths:
+        shown = ", ".join(f"{length:.3g}" for length in cut_lengths)
+        changes.append(f"cut {len(cut_lengths)} handle{'s' * (len(cut_lengths) > 1)} open (parts joined where they "
+                       f"touch?) along the shortest loop around each, {shown} sqrt(area) long")
+    if handles_left:
+        changes.append(f"left {handles_left} handle{'s' * (handles_left > 1)} as {'they are' if handles_left > 1 else 'it is'}: "
+                       f"no loop around {'them' if handles_left > 1 else 'it'} is shorter than {settings.handle_length:g} sqrt(area)")
     mesh, holes, added, loops = fill_small_holes(mesh, settings.hole_length, settings.hole_edges,
                                                  degenerate_area=settings.degenerate_area)
     if holes:
@@ -257,6 +265,77 @@ def _refuse_soup(mesh: Mesh, repair: bool, tolerance: float) -> None:
 
 
 # ----------------------------------------------------------------------------------------------
+# Handles
+
+
+def cut_handles(mesh: Mesh, max_length: float, roots: int) -> tuple[Mesh, list[float], int]:
+    """``(mesh, lengths, left)``: a connected, manifold, consistently oriented ``mesh`` cut open
+    along the shortest loop around each of its handles (:mod:`darcyan.geometry.handles`) shorter
+    than ``max_length`` (sqrt(area) units), one handle at a time, shortest first; ``lengths``
+    are the cuts' (sqrt(area) units), ``left`` the handles whose loops are longer. Each loop's
+    vertices get one copy per side (appended; ``input_index`` the original's), and its two sides
+    become boundary loops. A loop is taken only when the cut leaves the surface in one piece with
+    one handle fewer. ``roots``: farthest points (from the vertex nearest the centroid) whose
+    loops are compared; 0 or ``max_length`` 0: nothing is cut."""
+    from .handles import genus
+
+    handles = genus(mesh) if max_length > 0 and roots > 0 else 0
+    if handles <= 0:
+        return mesh, [], 0
+    scale = np.sqrt(mesh.area())
+    lengths: list[float] = []
+    while handles > 0:
+        cut, length = _cut_shortest_handle(mesh, handles, max_length * scale, roots)
+        if cut is None:
+            break
+        mesh, handles = cut, handles - 1
+        lengths.append(length / scale)
+    return mesh, lengths, handles
+
+
+def _cut_shortest_handle(mesh: Mesh, handles: int, max_length: float, roots: int) -> tuple[Mesh | None, float]:
+    """``mesh`` (of genus ``handles``) cut along the shortest loop around a handle that is
+    shorter than ``max_length`` (mesh units) and leaves it in one piece with one handle fewer,
+    and the loop's length; ``(None, inf)`` when there is none."""
+    from .handles import HandleLoops, genus
+    from .sampling import farthest_point_vertices
+
+    made: dict[int, Mesh] = {}
+
+    def accept(loop) -> bool:
+        if loop.length >= max_length:
+            return False
+        cut = _cut_along(mesh, loop.vertices)
+        if _component_count(cut) == 1 and genus(cut) < handles:
+            made[id(loop)] = cut
+            return True
+        return False
+
+    centre = int(np.argmin(np.linalg.norm(mesh.vertices - mesh.vertices.mean(axis=0), axis=1)))
+    loop = HandleLoops(mesh).shortest(farthest_point_vertices(mesh.vertices, roots, centre), accept)
+    return (None, np.inf) if loop is None else (made[id(loop)], loop.length)
+
+
+def _cut_along(mesh: Mesh, loop: np.ndarray) -> Mesh:
+    """``mesh`` cut open along the closed loop of edges through ``loop``'s vertices (in order)."""
+    n = mesh.n_vertices
+    ends = np.roll(loop, -1)
+    cut, _ = _split_fans(mesh, np.minimum(loop, ends) * n + np.maximum(loop, ends))
+    return cut
+
+
+def _component_count(mesh: Mesh) -> int:
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    f = mesh.faces
+    graph = sp.coo_matrix((np.ones(2 * len(f)), (np.r_[f[:, 0], f[:, 1]], np.r_[f[:, 1], f[:, 2]])),
+                          shape=(mesh.n_vertices, mesh.n_vertices))
+    labels = connected_components(graph, directed=False)[1]
+    return len(np.unique(labels[np.unique(f)]))
+
+
+# ----------------------------------------------------------------------------------------------
 # Non-manifold edges and vertices
 
 
@@ -301,11 +380,12 @@ def nonmanifold_vertices(mesh: Mesh) -> np.ndarray:
     return np.flatnonzero(np.bincount(fans // (3 * mesh.n_faces), minlength=mesh.n_vertices) > 1)
 
 
-def _split_fans(mesh: Mesh) -> tuple[Mesh, np.ndarray]:
+def _split_fans(mesh: Mesh, cut_keys: np.ndarray | None = None) -> tuple[Mesh, np.ndarray]:
     """One vertex per (vertex, fan): the first fan of each vertex keeps it, the others get copies
-    appended after the existing vertices. Returns the mesh and the vertices that were split."""
+    appended after the existing vertices. Returns the mesh and the vertices that were split.
+    ``cut_keys``: edges (keys ``lo * n + hi``) not glued, so that the surface is cut along them."""
     n_corners = 3 * mesh.n_faces
-    pair = mesh.faces.ravel() * n_corners + _corner_fans(mesh)
+    pair = mesh.faces.ravel() * n_corners + _corner_fans(mesh, cut_keys)
     pairs, corner_pair = np.unique(pair, return_inverse=True)
     vertex = pairs // n_corners
     copy = np.r_[False, vertex[1:] == vertex[:-1]]  # a second, third... fan of its vertex
@@ -320,14 +400,20 @@ def _split_fans(mesh: Mesh) -> tuple[Mesh, np.ndarray]:
     return split, np.unique(copied)
 
 
-def _corner_fans(mesh: Mesh) -> np.ndarray:
+def _corner_fans(mesh: Mesh, cut_keys: np.ndarray | None = None) -> np.ndarray:
     """``(3m,)`` for each face corner (corner ``3t + i`` is vertex ``faces[t, i]``) a label shared by
     the corners of one fan: the faces around a vertex reached from one another across glued edges
-    (:func:`_glued_half_edges`)."""
+    (:func:`_glued_half_edges`), but for the edges whose keys are ``cut_keys``."""
     # Half-edge h = 3t + i runs from corner h (vertex f[t, i]) to corner nxt[h] of the same face.
     start = mesh.faces.ravel()
     nxt = np.arange(3 * mesh.n_faces).reshape(-1, 3)[:, [1, 2, 0]].ravel()
-    return _fans(start, nxt, *_glued_half_edges(mesh.n_vertices, start, nxt))
+    h1, h2 = _glued_half_edges(mesh.n_vertices, start, nxt)
+    if cut_keys is not None and len(cut_keys):
+        n = mesh.n_vertices
+        a, b = start[h1], start[nxt[h1]]
+        glued = ~np.isin(np.minimum(a, b) * n + np.maximum(a, b), cut_keys)
+        h1, h2 = h1[glued], h2[glued]
+    return _fans(start, nxt, h1, h2)
 
 
 def _fans(start: np.ndarray, nxt: np.ndarray, h1: np.ndarray, h2: np.ndarray) -> np.ndarray:
