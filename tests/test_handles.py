@@ -51,7 +51,11 @@ def test_a_thin_handle_is_cut_along_its_tube(minor, nv):
     prepared, changes = prepare_mesh(torus, settings=CUT)
     assert genus(prepared) == 0 and boundary_loop_count(prepared) == 2
     assert prepared.n_vertices == torus.n_vertices + nv  # one copy of each vertex of the loop
-    np.testing.assert_array_equal(prepared.input_index[torus.n_vertices:] < torus.n_vertices, True)
+    copied = prepared.input_index[torus.n_vertices:]
+    assert len(np.unique(copied)) == nv  # nv distinct vertices, each copied in place
+    np.testing.assert_array_equal(prepared.vertices[torus.n_vertices:], torus.vertices[copied])
+    # the loop goes round the tube: its vertices lie on one cross-section
+    assert len(np.unique(np.round(np.arctan2(torus.vertices[copied, 1], torus.vertices[copied, 0]), 6))) == 1
     (note,) = [c for c in changes if c.startswith("cut 1 handle")]
     length = float(note.split("each, ")[1].split(" ")[0])
     assert length == pytest.approx(tube_loop_length(minor, nv, torus), rel=0.01)
@@ -109,3 +113,47 @@ def test_a_config_file_switches_the_cut_on_and_the_shape_says_so():
 def test_a_sphere_is_never_cut(sphere):
     prepared, changes = prepare_mesh(sphere, settings=Repairing(handle_length=10.0))
     assert prepared.n_vertices == sphere.n_vertices and not any("handle" in c for c in changes)
+
+
+def slab_with_two_holes() -> Mesh:
+    """A genus-2 surface: marching cubes of a voxel slab (10 x 5 x 2) with two square holes
+    through it."""
+    from skimage.measure import marching_cubes
+
+    solid = np.zeros((14, 9, 6))
+    solid[2:12, 2:7, 2:4] = 1
+    solid[4:6, 4:5, :] = 0
+    solid[8:10, 4:5, :] = 0
+    vertices, faces, _, _ = marching_cubes(solid, 0.5)
+    return Mesh(vertices, faces[:, ::-1])
+
+
+def test_every_handle_of_a_genus_two_surface_is_cut():
+    slab = slab_with_two_holes()
+    assert genus(slab) == 2
+    prepared, changes = prepare_mesh(slab, settings=Repairing(handle_length=1.0, hole_length=0))
+    assert genus(prepared) == 0 and boundary_loop_count(prepared) == 4
+    assert any(c.startswith("cut 2 handles open") for c in changes)
+
+
+def test_off_by_default_costs_nothing(monkeypatch):
+    """With the defaults the genus is not even computed."""
+    import darcyan.geometry.handles as handles
+
+    def fail(mesh):
+        raise AssertionError("genus computed")
+
+    monkeypatch.setattr(handles, "genus", fail)
+    prepared, changes = prepare_mesh(thin_torus(0.005))
+    assert prepared.n_vertices == thin_torus(0.005).n_vertices
+    with pytest.raises(AssertionError, match="genus computed"):
+        prepare_mesh(thin_torus(0.005), settings=CUT)
+
+
+def test_loops_are_sought_on_a_manifold_mesh_only(sphere):
+    from darcyan.errors import DarcyanError
+
+    bow_tie = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0.0]]), np.array([[0, 1, 2], [0, 3, 4]]))
+    with pytest.raises(DarcyanError, match="manifold"):
+        HandleLoops(bow_tie)
+    assert HandleLoops(sphere).through(0) == []  # no handle, no loop

@@ -103,7 +103,7 @@ class Repairing:
             the eigenfunctions far beyond itself. 0 (the default): no handle is cut, since on
             the glued and marching-cubes copies cutting mended some maps and broke as many
             (``docs/decisions/every-pair.md``, "Handles cut open"); 0.05 cuts the bridges of
-            fused fingers and of a hand touching a hip, not a limb.
+            fused fingers and of a hand that touches a hip at one spot, not a limb.
         handle_roots: the farthest points from which the loops around handles are sought
             (:class:`darcyan.geometry.handles.HandleLoops`; then again from the shortest loop's
             own vertices); 0: no handle is cut.

@@ -12,8 +12,8 @@ and homology generators*, SODA 2005): from a root vertex, a shortest-path tree `
 edges not in ``T``, a spanning tree of the faces that keeps the longest loops; the ``2g`` edges
 left each close one loop (the tree paths from its end points), and the shortest loop through
 the root that cannot be contracted to a point is the shortest of them. This module takes the
-shortest such loop over farthest-point roots, then again from vertices of the loop found, until
-it no longer shortens: near the shortest loop of the whole surface, which the exact algorithm
+shortest such loop over farthest-point roots, then again from up to 12 vertices of the loop
+found, for up to three rounds while it shortens: near the shortest loop of the whole surface, which the exact algorithm
 (one root per vertex) would find at a cost quadratic in the vertices.
 """
 
@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import DarcyanError
 from .mesh import Mesh
 
 
@@ -71,8 +72,9 @@ class HandleLoops:
 
     Each boundary loop is capped for the search by a cone to a vertex of its own whose edges are
     too long for any shortest path: the capped surface is closed, so every loop of the basis goes
-    around a handle (on a surface with holes, some would go around a hole instead), and none
-    crosses a cap.
+    around a handle (on a surface with holes, some would go around a hole instead). A loop
+    through a cap's apex is left out. Raises :class:`~darcyan.errors.DarcyanError` for a mesh
+    with an edge of more than two faces (prepare it first).
     """
 
     def __init__(self, mesh: Mesh):
@@ -103,6 +105,9 @@ class HandleLoops:
         a, b = faces.ravel(), faces[:, [1, 2, 0]].ravel()
         edge_of_corner = np.searchsorted(keys, np.minimum(a, b) * total + np.maximum(a, b))
         order = np.argsort(edge_of_corner, kind="stable")
+        if len(order) != 2 * len(keys) or capped.edge_counts()[1].min() != 2:
+            raise DarcyanError(f"{mesh.name}: handles are sought on a manifold mesh (two faces on every edge "
+                               f"once its holes are capped): prepare it first (darcyan.prepare_mesh)")
         self._edge_faces = np.repeat(np.arange(len(faces)), 3)[order].reshape(-1, 2)
         self._keys = keys
         self._n_faces = len(faces)
@@ -123,6 +128,8 @@ class HandleLoops:
         e = self._edges
         loop_length = distance[e[:, 0]] + self._lengths + distance[e[:, 1]]
         rest = np.flatnonzero(~in_tree & np.isfinite(loop_length))
+        if not len(rest):  # a root on no face, or a surface without handles
+            return []
         faces = self._edge_faces[rest]
         # The spanning tree of the faces that keeps the longest loops: minimum over reversed lengths.
         weight = loop_length[rest].max() + 1.0 - loop_length[rest]

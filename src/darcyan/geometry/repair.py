@@ -177,7 +177,8 @@ def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairi
                        f"touch?) along the shortest loop around each, {shown} sqrt(area) long")
     if handles_left:
         changes.append(f"left {handles_left} handle{'s' * (handles_left > 1)} as {'they are' if handles_left > 1 else 'it is'}: "
-                       f"no loop around {'them' if handles_left > 1 else 'it'} is shorter than {settings.handle_length:g} sqrt(area)")
+                       f"no loop found around {'them' if handles_left > 1 else 'it'} that is shorter than "
+                       f"{settings.handle_length:g} sqrt(area) and cuts {'them' if handles_left > 1 else 'it'} open")
     mesh, holes, added, loops = fill_small_holes(mesh, settings.hole_length, settings.hole_edges,
                                                  degenerate_area=settings.degenerate_area)
     if holes:
@@ -272,11 +273,12 @@ def cut_handles(mesh: Mesh, max_length: float, roots: int) -> tuple[Mesh, list[f
     """``(mesh, lengths, left)``: a connected, manifold, consistently oriented ``mesh`` cut open
     along the shortest loop around each of its handles (:mod:`darcyan.geometry.handles`) shorter
     than ``max_length`` (sqrt(area) units), one handle at a time, shortest first; ``lengths``
-    are the cuts' (sqrt(area) units), ``left`` the handles whose loops are longer. Each loop's
-    vertices get one copy per side (appended; ``input_index`` the original's), and its two sides
-    become boundary loops. A loop is taken only when the cut leaves the surface in one piece with
-    one handle fewer. ``roots``: farthest points (from the vertex nearest the centroid) whose
-    loops are compared; 0 or ``max_length`` 0: nothing is cut."""
+    are the cuts' (sqrt(area) units), ``left`` the handles around which no such loop was found.
+    Each of a loop's vertices keeps one side and gets a copy for the other (appended;
+    ``input_index`` the original's), and the two sides become boundary loops. A loop is taken
+    only when the cut leaves the surface in one piece with fewer handles. ``roots``: farthest
+    points (from the vertex nearest the centroid) whose loops are compared; 0 or ``max_length``
+    0: nothing is cut, and nothing is computed."""
     from .handles import genus
 
     handles = genus(mesh) if max_length > 0 and roots > 0 else 0
@@ -285,35 +287,40 @@ def cut_handles(mesh: Mesh, max_length: float, roots: int) -> tuple[Mesh, list[f
     scale = np.sqrt(mesh.area())
     lengths: list[float] = []
     while handles > 0:
-        cut, length = _cut_shortest_handle(mesh, handles, max_length * scale, roots)
+        cut, handles_left, length = _cut_shortest_handle(mesh, handles, max_length * scale, roots)
         if cut is None:
             break
-        mesh, handles = cut, handles - 1
+        mesh, handles = cut, handles_left
         lengths.append(length / scale)
     return mesh, lengths, handles
 
 
-def _cut_shortest_handle(mesh: Mesh, handles: int, max_length: float, roots: int) -> tuple[Mesh | None, float]:
-    """``mesh`` (of genus ``handles``) cut along the shortest loop around a handle that is
-    shorter than ``max_length`` (mesh units) and leaves it in one piece with one handle fewer,
-    and the loop's length; ``(None, inf)`` when there is none."""
+def _cut_shortest_handle(mesh: Mesh, handles: int, max_length: float, roots: int) -> tuple[Mesh | None, int, float]:
+    """``(cut, its genus, the loop's length)``: ``mesh`` (of genus ``handles``) cut along the
+    shortest loop around a handle that is shorter than ``max_length`` (mesh units) and leaves it
+    in one piece with fewer handles; ``(None, handles, inf)`` when there is none."""
     from .handles import HandleLoops, genus
     from .sampling import farthest_point_vertices
 
-    made: dict[int, Mesh] = {}
+    made: dict[int, tuple[Mesh, int]] = {}
 
     def accept(loop) -> bool:
+        if id(loop) in made:  # the best loop so far, met again in a later round
+            return True
         if loop.length >= max_length:
             return False
         cut = _cut_along(mesh, loop.vertices)
-        if _component_count(cut) == 1 and genus(cut) < handles:
-            made[id(loop)] = cut
+        left = genus(cut)
+        if left < handles and _component_count(cut) == 1:
+            made[id(loop)] = (cut, left)
             return True
         return False
 
-    centre = int(np.argmin(np.linalg.norm(mesh.vertices - mesh.vertices.mean(axis=0), axis=1)))
-    loop = HandleLoops(mesh).shortest(farthest_point_vertices(mesh.vertices, roots, centre), accept)
-    return (None, np.inf) if loop is None else (made[id(loop)], loop.length)
+    used = np.unique(mesh.faces)
+    centre = used[np.argmin(np.linalg.norm(mesh.vertices[used] - mesh.vertices[used].mean(axis=0), axis=1))]
+    roots = used[farthest_point_vertices(mesh.vertices[used], roots, int(np.searchsorted(used, centre)))]
+    loop = HandleLoops(mesh).shortest(roots, accept)
+    return (None, handles, np.inf) if loop is None else (*made[id(loop)], loop.length)
 
 
 def _cut_along(mesh: Mesh, loop: np.ndarray) -> Mesh:

@@ -1,0 +1,76 @@
+"""How many handles a set of meshes has, and how long the loops that would cut them are.
+
+    python benchmarks/handles.py COPIES/faust-5k/glued COPIES/tosca-5k/marching-cubes --repair
+
+For each folder, every ``*.off`` mesh is prepared as darcyan prepares it (``--repair``: as
+``darcyan bench --repair``) without cutting handles, and its genus counted
+(:func:`darcyan.geometry.handles.genus`; a body is a sphere, genus 0: a handle is where parts
+that touch were joined). Each mesh with handles is prepared again cutting every handle
+(``handle_length`` 10), and the cut loops' lengths (sqrt(area)) are binned; then once more with
+``--length`` (0.05), timed, to say how many handles that length leaves. Prints a table per folder
+(the census of ``docs/decisions/every-pair.md``, "Handles cut open").
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from darcyan import load_mesh, prepare_mesh
+from darcyan.config import Repairing
+from darcyan.geometry.handles import genus
+
+BINS = (0.03, 0.05, 0.1)
+
+
+def cut_lengths(changes: list[str]) -> list[float]:
+    """The loop lengths of a ``cut N handles ... each, a, b sqrt(area) long`` note."""
+    note = next((c for c in changes if c.startswith("cut ")), None)
+    return [] if note is None else [float(x) for x in note.split("each, ")[1].split(" sqrt")[0].split(", ")]
+
+
+def census(folder: Path, repair: bool, length: float) -> str:
+    shapes, counts, lengths, seconds, left = 0, collections.Counter(), [], [], collections.Counter()
+    for path in sorted(folder.glob("*.off")):
+        mesh = load_mesh(path)
+        shapes += 1
+        handles = genus(prepare_mesh(mesh, repair, Repairing(handle_length=0))[0])
+        counts[handles] += 1
+        if not handles:
+            continue
+        lengths += cut_lengths(prepare_mesh(mesh, repair, Repairing(handle_length=10.0))[1])
+        start = time.perf_counter()
+        cut, _ = prepare_mesh(mesh, repair, Repairing(handle_length=length))
+        seconds.append(time.perf_counter() - start)
+        left[genus(cut)] += 1
+    loops = np.array(lengths)
+    edges = (0.0, *BINS, np.inf)
+    binned = " / ".join(str(int(((loops >= lo) & (loops < hi)).sum())) for lo, hi in zip(edges, edges[1:]))
+    with_handles = shapes - counts[0]
+    timing = f"{np.median(seconds):.2f} s (at most {max(seconds):.2f} s)" if seconds else "-"
+    return (f"| {folder} | {with_handles} of {shapes} | {sum(k * v for k, v in counts.items())} | {binned} | "
+            f"{with_handles - left[0]} | {timing} |")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("folders", type=Path, nargs="+")
+    parser.add_argument("--repair", action="store_true", help="prepare as with --repair")
+    parser.add_argument("--length", type=float, default=0.05, help="handle_length of the timed cut")
+    args = parser.parse_args()
+    print(f"| folder | shapes with handles | handles | shortest loops < {' / '.join(f'{b:g}' for b in BINS)} / more "
+          f"(sqrt(area)) | shapes left with handles at {args.length:g} | preparing with the cut, median |")
+    print("| --- | ---: | ---: | --- | ---: | --- |")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for folder in args.folders:
+            print(census(folder, args.repair, args.length), flush=True)
+
+
+if __name__ == "__main__":
+    main()
