@@ -8,7 +8,8 @@ For each folder, every ``*.off`` mesh is prepared as darcyan prepares it (``--re
 that touch were joined). Each mesh with handles is prepared again cutting every handle
 (``handle_length`` 10), and the cut loops' lengths (sqrt(area)) are binned; then once more with
 ``--length`` (0.05), timed, to say how many handles that length leaves. Prints a table per folder
-(the census of ``docs/decisions/every-pair.md``, "Handles cut open").
+(the census of ``docs/decisions/every-pair.md``, "Handles cut open"). ``--plot FILE``: a picture
+of where the cuts below ``--length`` fall on the shape with the most handles of each folder.
 """
 
 from __future__ import annotations
@@ -34,13 +35,16 @@ def cut_lengths(changes: list[str]) -> list[float]:
     return [] if note is None else [float(x) for x in note.split("each, ")[1].split(" sqrt")[0].split(", ")]
 
 
-def census(folder: Path, repair: bool, length: float) -> str:
+def census(folder: Path, repair: bool, length: float) -> tuple[str, Path | None]:
+    """The folder's table row, and its mesh with the most handles."""
     shapes, counts, lengths, seconds, left = 0, collections.Counter(), [], [], collections.Counter()
+    most = (0, None)
     for path in sorted(folder.glob("*.off")):
         mesh = load_mesh(path)
         shapes += 1
         handles = genus(prepare_mesh(mesh, repair, Repairing(handle_length=0))[0])
         counts[handles] += 1
+        most = max(most, (handles, path), key=lambda m: m[0])
         if not handles:
             continue
         lengths += cut_lengths(prepare_mesh(mesh, repair, Repairing(handle_length=10.0))[1])
@@ -54,7 +58,38 @@ def census(folder: Path, repair: bool, length: float) -> str:
     with_handles = shapes - counts[0]
     timing = f"{np.median(seconds):.2f} s (at most {max(seconds):.2f} s)" if seconds else "-"
     return (f"| {folder} | {with_handles} of {shapes} | {sum(k * v for k, v in counts.items())} | {binned} | "
-            f"{with_handles - left[0]} | {timing} |")
+            f"{with_handles - left[0]} | {timing} |"), most[1]
+
+
+def plot_cuts(paths: list, repair: bool, length: float, out: Path) -> None:
+    """Each mesh's prepared vertices (grey) and the vertices of its cut loops (red), front and side."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=(4 * len(paths), 8))
+    for i, path in enumerate(paths):
+        mesh, changes = prepare_mesh(load_mesh(path), repair, Repairing(handle_length=length))
+        copies, counts = np.unique(mesh.input_index, return_counts=True)
+        on_cut = np.isin(mesh.input_index, copies[counts > 1])
+        # the shape's principal axes: its longest upright, its shortest towards the viewer
+        centred = mesh.vertices - mesh.vertices.mean(axis=0)
+        axes = np.linalg.svd(centred, full_matrices=False)[2]
+        v = centred @ axes[[1, 2, 0]].T
+        for row, azimuth in enumerate((-90, 0)):
+            ax = fig.add_subplot(2, len(paths), row * len(paths) + i + 1, projection="3d")
+            ax.scatter(*v[::2].T, s=0.3, c="0.75")
+            ax.scatter(*v[on_cut].T, s=14, c="tab:red")
+            ax.view_init(5, azimuth)
+            ax.set_box_aspect(np.ptp(v, axis=0))
+            ax.set_axis_off()
+        cuts = cut_lengths(changes)
+        shown = ", ".join(f"{c:.3f}" for c in cuts[:4]) + (", ..." if len(cuts) > 4 else "")
+        fig.axes[-2].set_title(f"{path.parent.name}/{path.name}\n{len(cuts)} cut below {length:g}: {shown}", fontsize=9)
+    fig.suptitle(f"handles cut open (red: the cut loops' vertices; handle_length {length:g} sqrt(area))")
+    fig.savefig(out, dpi=80, bbox_inches="tight")
+    print(f"wrote {out}")
 
 
 def main() -> None:
@@ -62,14 +97,20 @@ def main() -> None:
     parser.add_argument("folders", type=Path, nargs="+")
     parser.add_argument("--repair", action="store_true", help="prepare as with --repair")
     parser.add_argument("--length", type=float, default=0.05, help="handle_length of the timed cut")
+    parser.add_argument("--plot", type=Path, help="a picture of the cuts on each folder's mesh with the most handles")
     args = parser.parse_args()
     print(f"| folder | shapes with handles | handles | shortest loops < {' / '.join(f'{b:g}' for b in BINS)} / more "
           f"(sqrt(area)) | shapes left with handles at {args.length:g} | preparing with the cut, median |")
     print("| --- | ---: | ---: | --- | ---: | --- |")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
+        most = []
         for folder in args.folders:
-            print(census(folder, args.repair, args.length), flush=True)
+            row, path = census(folder, args.repair, args.length)
+            print(row, flush=True)
+            most += [path] if path is not None else []
+        if args.plot and most:
+            plot_cuts(most, args.repair, args.length, args.plot)
 
 
 if __name__ == "__main__":
