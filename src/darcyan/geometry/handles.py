@@ -13,8 +13,8 @@ edges not in ``T``, a spanning tree of the faces that keeps the longest loops; t
 left each close one loop (the tree paths from its end points), and the shortest loop through
 the root that cannot be contracted to a point is the shortest of them. This module takes the
 shortest such loop over farthest-point roots, then again from up to 12 vertices of the loop
-found, for up to three rounds while it shortens: near the shortest loop of the whole surface, which the exact algorithm
-(one root per vertex) would find at a cost quadratic in the vertices.
+found, for up to three rounds while it shortens: near the shortest loop of the whole surface,
+which the exact algorithm (one root per vertex) would find at a cost quadratic in the vertices.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DarcyanError
-from .mesh import Mesh
+from .mesh import Mesh, boundary_loop_vertices, boundary_loops
 
 
 @dataclass(frozen=True)
@@ -41,21 +41,6 @@ class HandleLoop:
     length: float
 
 
-def boundary_loop_count(mesh: Mesh) -> int:
-    """How many boundary loops a manifold mesh has (0: closed)."""
-    keys, counts = mesh.edge_counts()
-    n = mesh.n_vertices
-    rim = keys[counts == 1]
-    if not len(rim):
-        return 0
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-
-    graph = sp.coo_matrix((np.ones(len(rim)), (rim // n, rim % n)), shape=(n, n))
-    labels = connected_components(graph, directed=False)[1]
-    return len(np.unique(labels[np.unique(np.r_[rim // n, rim % n])]))
-
-
 def genus(mesh: Mesh) -> int:
     """The genus (number of handles) of a connected, manifold, oriented mesh: from its Euler
     characteristic ``V - E + F = 2 - 2 g - b`` (``b`` boundary loops; vertices no face uses
@@ -63,7 +48,7 @@ def genus(mesh: Mesh) -> int:
     keys, _ = mesh.edge_counts()
     used = np.count_nonzero(np.bincount(mesh.faces.ravel(), minlength=mesh.n_vertices))
     euler = used - len(keys) + mesh.n_faces
-    return int(2 - euler - boundary_loop_count(mesh)) // 2
+    return int(2 - euler - len(boundary_loops(mesh)[1])) // 2
 
 
 class HandleLoops:
@@ -80,8 +65,6 @@ class HandleLoops:
     def __init__(self, mesh: Mesh):
         import scipy.sparse as sp
 
-        from .mesh import boundary_loop_vertices
-
         n = mesh.n_vertices
         self.mesh = mesh
         loops = boundary_loop_vertices(mesh)
@@ -97,17 +80,16 @@ class HandleLoops:
         self._lengths = np.linalg.norm(vertices[e[:, 0]] - vertices[e[:, 1]], axis=1)
         # too long for a shortest path, yet finite: the apexes are still reached (spanning tree)
         self._lengths[e[:, 1] >= n] = 10.0 * self._lengths[e[:, 1] < n].sum() + 1.0
-        total = len(vertices)
+        self._total = total = len(vertices)
         self._graph = sp.csr_matrix((np.r_[self._lengths, self._lengths], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
                                     shape=(total, total))
         # The two faces of each edge (the capped surface is closed).
-        keys, _ = capped.edge_counts()
-        a, b = faces.ravel(), faces[:, [1, 2, 0]].ravel()
-        edge_of_corner = np.searchsorted(keys, np.minimum(a, b) * total + np.maximum(a, b))
-        order = np.argsort(edge_of_corner, kind="stable")
-        if len(order) != 2 * len(keys) or capped.edge_counts()[1].min() != 2:
+        keys, counts = capped.edge_counts()
+        if (counts != 2).any():
             raise DarcyanError(f"{mesh.name}: handles are sought on a manifold mesh (two faces on every edge "
                                f"once its holes are capped): prepare it first (darcyan.prepare_mesh)")
+        a, b = faces.ravel(), faces[:, [1, 2, 0]].ravel()
+        order = np.argsort(np.searchsorted(keys, np.minimum(a, b) * total + np.maximum(a, b)), kind="stable")
         self._edge_faces = np.repeat(np.arange(len(faces)), 3)[order].reshape(-1, 2)
         self._keys = keys
         self._n_faces = len(faces)
@@ -119,7 +101,7 @@ class HandleLoops:
         import scipy.sparse as sp
         from scipy.sparse.csgraph import dijkstra, minimum_spanning_tree
 
-        n, n_faces = len(self._graph.indptr) - 1, self._n_faces
+        n, n_faces = self._total, self._n_faces
         distance, parent = dijkstra(self._graph, indices=int(root), return_predecessors=True)
         reached = np.flatnonzero(parent >= 0)
         in_tree = np.zeros(len(self._edges), bool)

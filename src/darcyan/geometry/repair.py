@@ -33,7 +33,7 @@ import numpy as np
 
 from ..config import Repairing
 from ..errors import MeshError
-from .mesh import Mesh, MeshWarning, _edge_counts, boundary_loop_vertices, boundary_vertices, face_areas
+from .mesh import Mesh, MeshWarning, _edge_counts, boundary_loop_vertices, boundary_vertices, face_areas, vertex_adjacency
 
 MIN_VERTICES = 4
 MIN_FACES = 2
@@ -332,14 +332,11 @@ def _cut_along(mesh: Mesh, loop: np.ndarray) -> Mesh:
 
 
 def _component_count(mesh: Mesh) -> int:
-    import scipy.sparse as sp
+    """How many connected pieces the faces of ``mesh`` make."""
     from scipy.sparse.csgraph import connected_components
 
-    f = mesh.faces
-    graph = sp.coo_matrix((np.ones(2 * len(f)), (np.r_[f[:, 0], f[:, 1]], np.r_[f[:, 1], f[:, 2]])),
-                          shape=(mesh.n_vertices, mesh.n_vertices))
-    labels = connected_components(graph, directed=False)[1]
-    return len(np.unique(labels[np.unique(f)]))
+    labels = connected_components(vertex_adjacency(mesh), directed=False)[1]
+    return len(np.unique(labels[np.unique(mesh.faces)]))
 
 
 # ----------------------------------------------------------------------------------------------
