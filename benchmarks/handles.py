@@ -99,6 +99,9 @@ def main() -> None:
     parser.add_argument("--length", type=float, default=0.05, help="handle_length of the timed cut")
     parser.add_argument("--plot", type=Path, help="a picture of the cuts on each folder's mesh with the most handles")
     args = parser.parse_args()
+    for folder in args.folders:
+        if not folder.is_dir() or not any(folder.glob("*.off")):
+            parser.error(f"{folder}: not a folder of .off meshes")
     print(f"| folder | shapes with handles | handles | shortest loops < {' / '.join(f'{b:g}' for b in BINS)} / more "
           f"(sqrt(area)) | shapes left with handles at {args.length:g} | preparing with the cut, median |")
     print("| --- | ---: | ---: | --- | ---: | --- |")
