@@ -81,3 +81,47 @@ def test_a_laplacian_of_the_wrong_sign_is_refused(cylinder):
     shape, _ = cylinder
     with pytest.raises(ValueError, match="no positive off-diagonal"):
         ArapDeformation(shape.mesh.vertices, -shape.laplacian, shape.vertex_areas, 0.035)
+
+
+def test_targets_at_points_of_a_coarse_copy_move_it_rigidly_and_follow_a_stiff_pull():
+    # The fine cylinder's vertices lie on the coarse one (every other section and ring), so
+    # each is a barycentric combination of coarse vertices: targets given there pull the copy.
+    from darcyan.geometry.proxy import CoarseProxy  # noqa: F401  (the layer that uses sampling)
+    from darcyan.geometry.geodesics import GeodesicSolver
+
+    fine = prepare_shape(synthetic.cylinder(sections=48, rings=49))
+    coarse = prepare_shape(synthetic.cylinder(sections=24, rings=25))
+    faces, bary = GeodesicSolver(coarse.mesh).locate(fine.mesh.vertices)
+    import scipy.sparse as sp
+
+    rows = np.repeat(np.arange(fine.mesh.n_vertices), 3)
+    sampling = sp.csr_matrix((bary.ravel(), (rows, coarse.mesh.faces[faces].ravel())),
+                             shape=(fine.mesh.n_vertices, coarse.mesh.n_vertices))
+    on_copy = sampling @ coarse.mesh.vertices
+    arap = ArapDeformation(coarse.mesh.vertices, coarse.laplacian, fine.vertex_areas, 0.035, sampling=sampling)
+    rotation, shift = random_rotation(6), np.array([0.5, -2.0, 1.0])
+    moved = coarse.mesh.vertices @ rotation.T + shift
+    fitted = arap.fit(on_copy @ rotation.T + shift, 4, start=moved)
+    assert np.abs(fitted - moved).max() < 1e-9
+    assert np.abs(arap.rotations(fitted) - rotation).max() < 1e-9
+    # From its default start (each vertex at the mean target of the points it carries) it gets there.
+    assert np.abs(arap.fit(on_copy @ rotation.T + shift, 4) - moved).max() < 1e-3
+    assert np.abs(arap.fit(on_copy @ rotation.T + shift, 30) - moved).max() < 1e-8
+    # Noise on the targets: filtered as on the mesh itself, and followed by a stiff pull as far
+    # as the copy can carry it (a least-squares fit of its vertices to the fine points).
+    noise = 0.01 * np.random.default_rng(7).normal(size=on_copy.shape)
+    soft = arap.fit(on_copy + noise, 6)
+    assert np.sqrt(((soft - coarse.mesh.vertices) ** 2).sum(1).mean()) < 0.35 * np.sqrt((noise ** 2).sum(1).mean())
+    stiff = ArapDeformation(coarse.mesh.vertices, coarse.laplacian, fine.vertex_areas, 1e-4, sampling=sampling)
+    weights = sp.diags(fine.vertex_areas)
+    best = sp.linalg.spsolve((sampling.T @ weights @ sampling).tocsc(), sampling.T @ weights @ (on_copy + noise))
+    assert np.abs(stiff.fit(on_copy + noise, 6) - best).max() < 1e-3
+
+
+def test_a_sampling_of_the_wrong_shape_is_refused(cylinder):
+    import scipy.sparse as sp
+
+    shape, _ = cylinder
+    n = shape.mesh.n_vertices
+    with pytest.raises(ValueError, match="sampling must be"):
+        ArapDeformation(shape.mesh.vertices, shape.laplacian, np.ones(n - 1), 0.035, sampling=sp.eye(n))

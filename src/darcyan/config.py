@@ -468,6 +468,10 @@ class DenseConfig:
             positions in the nearest-point search: a point near the surface of an arm is not
             sent across to the body beside it.
         alignment_iterations: local-global steps of the deformation per round.
+        alignment_proxy_vertices: the source of more than twice this many vertices is deformed
+            through its coarse copy of about this many (the one ``basis_proxy_vertices`` makes
+            when they are equal), its vertices moving with the copy; 0: always the mesh itself
+            (``docs/decisions/speed.md``).
         start_dimensions: when the matches give fewer than three consistent landmarks, the map
             starts from each choice of signs of this many first (non-constant) Laplace-Beltrami
             eigenfunctions, 2^d short maps (:mod:`darcyan.dense.start`).
@@ -561,6 +565,7 @@ class DenseConfig:
     alignment_length: float = 0.035
     alignment_normal_weight: float = 0.02
     alignment_iterations: int = 6
+    alignment_proxy_vertices: int = 6000
     alignment_slack: float = 0.04
     start_dimensions: int = 4
     start_landmarks: int = 6
@@ -595,7 +600,7 @@ class DenseConfig:
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"dense: {name} must be true or false, got {getattr(self, name)!r}")
         for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "signature_until",
-                     "basis_margin", "margin_from", "alignment_rounds"):
+                     "basis_margin", "margin_from", "alignment_rounds", "alignment_proxy_vertices"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 0:
                 raise ConfigError(f"dense: {name} must be a non-negative integer, got {value!r}")

@@ -6,7 +6,11 @@ The energy of positions ``y (n, 3)`` of a mesh at rest in ``x (n, 3)``, with tar
 
 (the first sum over ordered pairs of neighbours, so each edge twice; ``w`` the cotangent
 weights, clamped at 0; ``R_i`` the best rotation of vertex i's one-ring;
-``a`` the vertex areas over the total area). Both terms are areas times squared lengths, so the
+``a`` the vertex areas over the total area). The targets may also be given at points other than
+the vertices (``sampling``): the pull is then ``(2 / length^2) sum_s a_s |(P y)_s - t_s|^2`` over
+points ``P y``, each a barycentric combination of vertices, with areas ``a_s`` of their own. A
+coarse copy of a large mesh deformed so that the full mesh's vertices, carried on it, meet their
+targets: the same energy's data term at a tenth of the unknowns. Both terms are areas times squared lengths, so the
 balance does not depend on the mesh's scale or resolution: the mesh follows the targets on
 scales beyond about ``length`` (in sqrt(area) units) and keeps its own shape below it, bends
 included, since each one-ring may turn. It is minimized by local-global iterations: each one-ring's
@@ -30,9 +34,12 @@ class ArapDeformation:
             :attr:`darcyan.geometry.shape.Shape.laplacian`).
         areas: ``(n,)`` its vertex areas (any scale: they are divided by their sum).
         length: the scale (sqrt(area) units of the mesh) beyond which the fit follows the targets.
+        sampling: ``(m, n)`` scipy sparse, each row the barycentric weights (summing to 1) of a
+            point of the surface where a target is given; ``None``: the targets are at the
+            vertices. With it, ``areas`` are the ``(m,)`` areas of those points.
     """
 
-    def __init__(self, vertices: np.ndarray, laplacian, areas: np.ndarray, length: float):
+    def __init__(self, vertices: np.ndarray, laplacian, areas: np.ndarray, length: float, sampling=None):
         import scipy.sparse as sp  # lazily: a cached match imports no scipy
         from scipy.sparse.linalg import splu
 
@@ -55,24 +62,53 @@ class ArapDeformation:
         # sum_j w_ij (x_i - x_j): the rest one-ring, rotated in each step
         self._spokes = degree[:, None] * self._vertices - self._weights @ self._vertices
         areas = np.asarray(areas, dtype=np.float64)
-        # an isolated vertex (no face of nonzero area) still gets a pull, so the system stays regular
-        areas = np.maximum(areas / areas.sum(), 1e-3 / n)
-        self._pull = areas / length ** 2
-        system = sp.diags(degree + self._pull) - self._weights
+        self._sampling = None
+        if sampling is None:
+            # an isolated vertex (no face of nonzero area) still gets a pull, so the system stays regular
+            areas = np.maximum(areas / areas.sum(), 1e-3 / n)
+            self._pull = areas / length ** 2
+            system = sp.diags(degree + self._pull) - self._weights
+        else:
+            sampling = sp.csr_matrix(sampling, dtype=np.float64)
+            if sampling.shape != (len(areas), n):
+                raise ValueError(f"ARAP: sampling must be ({len(areas)}, {n}) for {len(areas)} areas and {n} "
+                                 f"vertices, got {sampling.shape}")
+            self._sampling = sampling
+            self._sample_pull = areas / areas.sum() / length ** 2
+            pulled = sampling.T @ sp.diags(self._sample_pull) @ sampling
+            # each vertex's share of the pull; a vertex that no point reaches is held, faintly
+            # (the floor of the vertex case), at rest, so the system stays regular
+            self._reach = sampling.T @ self._sample_pull
+            self._floor = np.where(self._reach > 0, 0.0, 1e-3 / n / length ** 2)
+            system = sp.diags(degree + self._floor) - self._weights + pulled
         self._solve = splu(system.tocsc()).solve
 
     def fit(self, targets: np.ndarray, iterations: int, start: np.ndarray | None = None) -> np.ndarray:
-        """``(n, 3)``: positions after ``iterations`` local-global steps towards ``targets (n, 3)``,
-        starting from ``start (n, 3)`` (default: the targets). Time per step O(n) beside one
-        solve with the factorization built at construction (its fill-in grows a little faster
-        than n: about 0.2 s to build at 52k vertices)."""
+        """``(n, 3)``: positions after ``iterations`` local-global steps towards ``targets (n, 3)``
+        (``(m, 3)`` with a ``sampling``), starting from ``start (n, 3)`` (default: the targets;
+        with a sampling, each vertex at the mean of the targets of the points it carries, by
+        weight, or at rest where none). Time per step O(n) beside one solve with the
+        factorization built at construction (its fill-in grows a little faster than n: about
+        0.2 s to build at 52k vertices)."""
         targets = np.asarray(targets, dtype=np.float64)
-        positions = targets.copy() if start is None else np.asarray(start, dtype=np.float64)
-        pulled = self._pull[:, None] * targets
+        if self._sampling is None:
+            positions = targets.copy() if start is None else np.asarray(start, dtype=np.float64)
+            pulled = self._pull[:, None] * targets
+        else:
+            pulled = self._sampling.T @ (self._sample_pull[:, None] * targets)
+            reached = self._reach > 0
+            mean = np.where(reached[:, None], pulled / np.where(reached, self._reach, 1.0)[:, None], self._vertices)
+            positions = mean if start is None else np.asarray(start, dtype=np.float64)
+            pulled = pulled + self._floor[:, None] * mean
         for _ in range(iterations):
             rotations = self._rotations(positions)
             positions = self._solve(self._rotated_edges(rotations) + pulled)
         return positions
+
+    def rotations(self, positions: np.ndarray) -> np.ndarray:
+        """``(n, 3, 3)`` each one-ring's rotation best taking its rest edges to those of
+        ``positions (n, 3)`` (what a local step computes)."""
+        return self._rotations(np.asarray(positions, dtype=np.float64))
 
     def _rotations(self, positions: np.ndarray) -> np.ndarray:
         """``(n, 3, 3)`` each one-ring's rotation best taking its rest edges to its current ones:

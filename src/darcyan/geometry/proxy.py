@@ -67,6 +67,15 @@ class CoarseProxy:
         """Per-vertex ``values`` of the copy ``(n_proxy, ...)`` interpolated at the full mesh's vertices."""
         return interpolate(self.mesh, values, self._faces, self._bary)
 
+    def interpolation(self):
+        """``(n_full, n_proxy)`` scipy CSR: what :meth:`to_full` does, as a matrix (each row the
+        barycentric weights of a full vertex's point on the copy)."""
+        import scipy.sparse as sp
+
+        n_full = len(self._faces)
+        rows = np.repeat(np.arange(n_full), 3)
+        return sp.csr_matrix((self._bary.ravel(), (rows, self.mesh.faces[self._faces].ravel())),
+                             shape=(n_full, self.mesh.n_vertices))
 
     def rows_on_demand(self, values: np.ndarray) -> "InterpolatedRows":
         """``values (n_proxy, k)`` read at the full mesh's vertices as :meth:`to_full` reads them,
