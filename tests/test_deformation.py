@@ -86,14 +86,14 @@ def test_a_laplacian_of_the_wrong_sign_is_refused(cylinder):
 def test_targets_at_points_of_a_coarse_copy_move_it_rigidly_and_follow_a_stiff_pull():
     # The fine cylinder's vertices lie on the coarse one (every other section and ring), so
     # each is a barycentric combination of coarse vertices: targets given there pull the copy.
-    from darcyan.geometry.proxy import CoarseProxy  # noqa: F401  (the layer that uses sampling)
+    import scipy.sparse as sp
+    import scipy.sparse.linalg  # noqa: F401  (sp.linalg)
+
     from darcyan.geometry.geodesics import GeodesicSolver
 
     fine = prepare_shape(synthetic.cylinder(sections=48, rings=49))
     coarse = prepare_shape(synthetic.cylinder(sections=24, rings=25))
     faces, bary = GeodesicSolver(coarse.mesh).locate(fine.mesh.vertices)
-    import scipy.sparse as sp
-
     rows = np.repeat(np.arange(fine.mesh.n_vertices), 3)
     sampling = sp.csr_matrix((bary.ravel(), (rows, coarse.mesh.faces[faces].ravel())),
                              shape=(fine.mesh.n_vertices, coarse.mesh.n_vertices))
