@@ -377,3 +377,14 @@ def test_kept_operators_are_computed_once_and_stay_read_only_across_pickling(sph
         with pytest.raises(ValueError):
             kept[0] = 1.0
     np.testing.assert_array_equal(mixed_voronoi_area(copy), area)
+
+
+@pytest.mark.parametrize("text", ["OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+                                  "\n\nOFF 3 1 0\r\n  0 0 0  \r\n\r\n1 0 0\r\n0 1 0\r\n3 0 1 2",
+                                  "OFF\n\n\n3 1\n0 0 0\n1\t0 0\n0 1 0\n\n3 0 1 2\n\n", "x", "\n\n  \n"])
+def test_the_fast_reader_counts_each_lines_tokens_as_splitting_it_does(text):
+    from darcyan.io.mesh_files import _tokens_per_line
+
+    expected = [len(line.split()) for line in text.splitlines() if line.split()]
+    counts = _tokens_per_line(text.encode())
+    assert counts is not None and counts.tolist() == expected

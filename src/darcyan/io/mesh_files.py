@@ -193,8 +193,10 @@ def _tokens_per_line(data: bytes) -> np.ndarray | None:
     space = _ASCII_SPACE[b]
     starts = ~space
     starts[1:] &= space[:-1]
-    line_of = np.cumsum(b == ord("\n"))
-    counts = np.bincount(line_of[starts], minlength=int(line_of[-1]) + 1)
+    # each token's line: the newlines before its first byte (a running count of the newlines
+    # over every byte took 8 bytes a byte of the file: 144 MB for a 210k-vertex mesh)
+    newlines = np.flatnonzero(b == ord("\n"))
+    counts = np.bincount(np.searchsorted(newlines, np.flatnonzero(starts)), minlength=len(newlines) + 1)
     return counts[counts > 0]
 
 
