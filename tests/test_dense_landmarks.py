@@ -87,6 +87,25 @@ def test_orientation_coordinates_by_blocks_of_faces_are_the_same_bits(figure_pos
         assert np.array_equal(landmarks.orientation_coordinates(shape, fields, extra), expected)
 
 
+def test_turns_kept_by_landmark_pair_are_the_same_bits_in_any_order_and_subset(figure_poses):
+    from darcyan.dense.landmarks import orientation_coordinates
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(figure_poses[0])
+    vertices = np.array([0, 500, 1000, 1500, 2000])
+    fields = np.stack([shape.solver.distance(v) for v in vertices], axis=1)
+    known = {}
+    # A first set, then others that reuse its pairs in another order, a subset and a new vertex:
+    # each the same bits as made afresh, and only the new pairs made.
+    for order, new_pairs in (([0, 1, 2, 3], 6), ([3, 1, 0], 0), ([2, 0], 0), ([4, 2, 1, 0], 3)):
+        expected = orientation_coordinates(shape, fields[:, order])
+        made = len(known)
+        kept = orientation_coordinates(shape, fields[:, order], vertices=vertices[order], known=known)
+        assert np.array_equal(kept, expected)
+        assert len(known) - made == new_pairs
+    assert np.abs(known[(0, 500)]).max() > 0.1  # turns that are there to be mistaken
+
+
 def test_orientation_coordinates_on_a_plane_are_the_sine_between_the_landmark_directions():
     # On a plane the distance to a point grows along the direction away from it, so the turn from
     # landmark a's gradient to landmark b's about the normal is sin of the angle between x - a and

@@ -105,15 +105,20 @@ def _landmark_pairs(shape_1, shape_2, correspondence, config: DenseConfig, field
     return src, tgt, fields_1, fields_2
 
 
-def landmark_set(shape_1, shape_2, matching, config: DenseConfig, fields: tuple) -> tuple | None:
+def landmark_set(shape_1, shape_2, matching, config: DenseConfig, fields: tuple,
+                 turns: tuple | None = None) -> tuple | None:
     """``(source, target, fields_1, fields_2, turns_1, turns_2, coords_1, coords_2)`` of one
     matching's consistent landmarks (``None`` below :data:`MIN_LANDMARKS`): their pairs, the
     distances to them ``(n, k)``, their :func:`orientation_coordinates` and the landmark
-    coordinates, the distances beside the turns weighed by ``orientation_weight``."""
+    coordinates, the distances beside the turns weighed by ``orientation_weight``. ``turns``:
+    one ``{(a, b): (n,) column}`` per shape, the turns' columns read and filled in (the
+    matchings of one pair share most of their landmarks)."""
     src, tgt, fields_1, fields_2 = _landmark_pairs(shape_1, shape_2, matching, config, fields)
     if len(src) < MIN_LANDMARKS:
         return None
-    turns_1, turns_2 = orientation_coordinates(shape_1, fields_1), orientation_coordinates(shape_2, fields_2)
+    known_1, known_2 = (None, None) if turns is None else turns
+    turns_1 = orientation_coordinates(shape_1, fields_1, vertices=src, known=known_1)
+    turns_2 = orientation_coordinates(shape_2, fields_2, vertices=tgt, known=known_2)
     return (src, tgt, fields_1, fields_2, turns_1, turns_2, coordinates_of(fields_1, turns_1, config),
             coordinates_of(fields_2, turns_2, config))
 
@@ -143,23 +148,56 @@ def landmark_coordinates(shape_1, shape_2, matching, config: DenseConfig = Dense
     return landmarks[-2:]
 
 
-def orientation_coordinates(shape, fields: np.ndarray, others: np.ndarray | None = None) -> np.ndarray:
+def orientation_coordinates(shape, fields: np.ndarray, others: np.ndarray | None = None,
+                            vertices: np.ndarray | None = None, known: dict | None = None) -> np.ndarray:
     """``(n, k (k - 1) / 2)``: at each vertex, for each two landmarks a < b, the sine of the turn
     from the gradient of the distance to a to that of the distance to b, about the outward normal
     (``fields (n, k)``: the distances). Distances to a few extremities cannot tell the front of a
     body from its back, nor left from right where the extremities sit symmetrically; these
     signs can: a reflection flips every one of them, an isometry keeps them. Averaged by area
     from the faces to the vertices. With ``others (n, j)``: ``(n, k j)``, the turn from each
-    field's gradient to each of the others' instead (column ``a j + b``: field a to other b)."""
-    from ..geometry.operators import face_gradients
+    field's gradient to each of the others' instead (column ``a j + b``: field a to other b).
 
-    mesh = shape.mesh
+    ``vertices (k,)`` (the landmarks whose distances ``fields`` are) with ``known`` (``{(a, b):
+    (n,) column}``, for this shape): each pair's column is read there, or made and kept there (the
+    turn from b to a is the turn from a to b negated, to the bit): the seeds of one pair share
+    most of their landmarks (without ``others`` only)."""
+    if others is None and vertices is not None and known is not None:
+        return _known_turns(shape, fields, [int(v) for v in vertices], known)
     k = fields.shape[1]
     if others is None:
         a, b = np.triu_indices(k, k=1)
     else:
         a, b = np.repeat(np.arange(k), others.shape[1]), k + np.tile(np.arange(others.shape[1]), k)
         fields = np.hstack([fields, others])
+    return _turns(shape, fields, a, b)
+
+
+def _known_turns(shape, fields: np.ndarray, vertices: list, known: dict) -> np.ndarray:
+    """:func:`orientation_coordinates` of ``fields`` (the distances to ``vertices``), its columns
+    read from ``known`` or made and kept there."""
+    pairs = list(zip(*np.triu_indices(len(vertices), k=1)))
+    missing = [(i, j) for i, j in pairs if (vertices[i], vertices[j]) not in known
+               and (vertices[j], vertices[i]) not in known]
+    if missing:
+        made = _turns(shape, fields, np.array([i for i, _ in missing], dtype=np.int64),
+                      np.array([j for _, j in missing], dtype=np.int64))
+        for column, (i, j) in enumerate(missing):
+            known[(vertices[i], vertices[j])] = made[:, column]
+    out = np.empty((shape.mesh.n_vertices, len(pairs)))
+    for column, (i, j) in enumerate(pairs):
+        key = (vertices[i], vertices[j])
+        out[:, column] = known[key] if key in known else -known[key[::-1]]
+    return out
+
+
+def _turns(shape, fields: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``(n, len(a))`` the turn from the gradient of ``fields[:, a[p]]`` to that of
+    ``fields[:, b[p]]`` for each p (:func:`orientation_coordinates`); each column depends on its
+    two fields alone, bit for bit."""
+    from ..geometry.operators import face_gradients
+
+    mesh = shape.mesh
     grads = face_gradients(mesh, fields, getattr(shape, "gradient", None))  # (m, 3, k [+ j])
     unit, corners, weight = _face_frame(shape)
     norm = np.linalg.norm(grads, axis=1)  # (m, k)

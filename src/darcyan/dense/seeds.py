@@ -302,8 +302,9 @@ def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple
     seeds = []
     seen = set()
     scoring = None
+    turns = ({}, {})  # the landmark pairs' turns, made once for all the matchings
     for rank, matching in enumerate(matchings):
-        landmarks = landmark_set(shape_1, shape_2, matching, config, fields)
+        landmarks = landmark_set(shape_1, shape_2, matching, config, fields, turns)
         if landmarks is None:
             continue
         # Matchings that differ only in matches the consistency test drops are one seed (the
