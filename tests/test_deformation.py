@@ -125,3 +125,23 @@ def test_a_sampling_of_the_wrong_shape_is_refused(cylinder):
     n = shape.mesh.n_vertices
     with pytest.raises(ValueError, match="sampling must be"):
         ArapDeformation(shape.mesh.vertices, shape.laplacian, np.ones(n - 1), 0.035, sampling=sp.eye(n))
+
+
+def test_a_vertex_no_sample_reaches_follows_its_neighbours_wherever_the_targets_lie(cylinder):
+    import scipy.sparse as sp
+
+    shape, _ = cylinder
+    rest = shape.mesh.vertices
+    n = len(rest)
+    # targets at every vertex but the first: that one is held by its one-ring (and a faint floor)
+    sampling = sp.eye(n, format="csr")[1:]
+    arap = ArapDeformation(rest, shape.laplacian, shape.vertex_areas[1:], 0.035, sampling=sampling)
+    rotation, shift = random_rotation(9), np.array([3.0, -1.0, 2.0])
+    moved = rest @ rotation.T + shift
+    fitted = arap.fit(moved[1:], 6, start=moved)
+    # the floor pulls it towards the others' mean move, not its own turn: a faint pull, so a few
+    # 1e-4 off at most (measured: 3e-4)
+    assert np.abs(fitted - moved).max() < 1e-3
+    # where the targets lie does not matter (the default start included)
+    far = np.array([50.0, 20.0, -40.0])
+    assert np.allclose(arap.fit(moved[1:] + far, 6), arap.fit(moved[1:], 6) + far, atol=1e-9)

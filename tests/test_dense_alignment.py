@@ -135,3 +135,28 @@ def test_a_small_source_is_deformed_itself():
     assert lift.interpolation is None
     _, lift = _deformation(shape, 0.035, 0)
     assert lift.interpolation is None
+
+
+def test_the_alignment_through_a_copy_follows_a_rigid_motion_of_the_source_detail_included(poses):
+    from darcyan.dense.alignment import align
+
+    shape_1, _, _ = poses
+    rotation, _ = np.linalg.qr(np.random.default_rng(11).normal(size=(3, 3)))
+    rotation *= np.sign(np.linalg.det(rotation))
+    mesh = shape_1.mesh
+    moved = prepare_shape(type(mesh)(mesh.vertices @ rotation.T + 2.0, mesh.faces))
+    identity = moved.mesh_index(shape_1.mesh.input_index)
+    through_copy = dataclasses.replace(DenseConfig(), alignment_proxy_vertices=1000)
+    aligned = align(shape_1, moved, identity, through_copy)
+    assert np.array_equal(aligned.map_12, identity)
+    # The residual: the deformed source's distance from the images, which the offsets' turns make
+    # small (at rest they would leave about their own length, here up to 0.003)
+    offsets = shape_1.mesh.vertices - shape_1.proxy(1000).to_full(shape_1.proxy(1000).mesh.vertices)
+    assert aligned.residual < 0.05 * np.linalg.norm(offsets, axis=1).mean()
+
+
+def test_the_copys_interpolation_matrix_is_its_read_out(poses):
+    shape_1, _, _ = poses
+    proxy = shape_1.proxy(1000)
+    values = np.random.default_rng(12).normal(size=(proxy.mesh.n_vertices, 4))
+    assert np.allclose(proxy.interpolation() @ values, proxy.to_full(values), rtol=0, atol=1e-12)

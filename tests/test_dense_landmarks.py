@@ -97,7 +97,8 @@ def test_turns_kept_by_landmark_pair_are_the_same_bits_in_any_order_and_subset(f
     known = {}
     # A first set, then others that reuse its pairs in another order, a subset and a new vertex:
     # each the same bits as made afresh, and only the new pairs made.
-    for order, new_pairs in (([0, 1, 2, 3], 6), ([3, 1, 0], 0), ([2, 0], 0), ([4, 2, 1, 0], 3)):
+    for order, new_pairs in (([0, 1, 2], 3), ([0, 1, 3], 2), ([0, 2, 3], 1), ([3, 1, 0], 0), ([2, 0], 0),
+                             ([4, 2, 1, 0], 3)):
         expected = orientation_coordinates(shape, fields[:, order])
         made = len(known)
         kept = orientation_coordinates(shape, fields[:, order], vertices=vertices[order], known=known)

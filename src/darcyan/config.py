@@ -468,7 +468,7 @@ class DenseConfig:
             positions in the nearest-point search: a point near the surface of an arm is not
             sent across to the body beside it.
         alignment_iterations: local-global steps of the deformation per round.
-        alignment_proxy_vertices: the source of more than twice this many vertices is deformed
+        alignment_proxy_vertices: the source of at least twice this many vertices is deformed
             through its coarse copy of about this many (the one ``basis_proxy_vertices`` makes
             when they are equal), its vertices moving with the copy; 0: always the mesh itself
             (``docs/decisions/speed.md``).

@@ -14,12 +14,14 @@ On a large source the deformation is that of its coarse copy
 (:meth:`~darcyan.geometry.shape.Shape.proxy`), whose points under the full mesh's vertices are
 pulled towards their images; each full vertex then moves with the point of the copy under it,
 keeping its offset from the copy (the detail the copy lacks). The limbs' bends and turns are
-far coarser than the copy's edges, and a tenth of the unknowns makes it a tenth of the time.
+far coarser than the copy's edges, and the copy has a ninth of the unknowns of a 52k-vertex source
+(a 35th of a 210k one).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -28,6 +30,9 @@ from ..geometry.geodesics import vertex_normals
 from ..geometry.knn import nearest_rows
 from ..geometry.mesh import Mesh
 from .config import DenseConfig
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 
 @dataclass(frozen=True)
@@ -86,9 +91,11 @@ class _Lift:
     """How the deformed mesh's positions become the source's: the identity, or the coarse
     copy's positions interpolated at the full vertices (``interpolation (n1, n_proxy)``) plus
     each vertex's ``offset (n1, 3)`` from the copy at rest, turned with the copy around it (so
-    that a rigid motion of the copy moves the source rigidly, its detail included)."""
+    that a rigid motion of the copy moves the source rigidly, its detail included; where the
+    copy's one-rings turn unlike each other, the blend of their rotations is not quite one, and
+    shortens the offset a little)."""
 
-    interpolation: object = None
+    interpolation: sp.csr_matrix | None = None
     offset: np.ndarray | None = None
 
     def turns(self, deformation: ArapDeformation, positions: np.ndarray) -> np.ndarray | None:

@@ -160,8 +160,8 @@ def orientation_coordinates(shape, fields: np.ndarray, others: np.ndarray | None
 
     ``vertices (k,)`` (the landmarks whose distances ``fields`` are) with ``known`` (``{(a, b):
     (n,) column}``, for this shape): each pair's column is read there, or made and kept there (the
-    turn from b to a is the turn from a to b negated, to the bit): the seeds of one pair share
-    most of their landmarks (without ``others`` only)."""
+    turn from b to a is the turn from a to b negated: the same numbers as made afresh, a zero's
+    sign aside): the seeds of one pair share most of their landmarks (without ``others`` only)."""
     if others is None and vertices is not None and known is not None:
         return _known_turns(shape, fields, [int(v) for v in vertices], known)
     k = fields.shape[1]

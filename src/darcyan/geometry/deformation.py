@@ -24,6 +24,11 @@ from __future__ import annotations
 
 import numpy as np
 
+# The faint pull (per vertex, over the vertex count, against area shares that sum to 1) that
+# keeps the system regular where a vertex has no pull of its own (no face of nonzero area, or no
+# sample point on its faces): about a thousandth of an ordinary vertex's.
+ISOLATED_PULL = 1e-3
+
 
 class ArapDeformation:
     """A mesh's as-rigid-as-possible fit to soft targets; build once, :meth:`fit` many times.
@@ -65,7 +70,7 @@ class ArapDeformation:
         self._sampling = None
         if sampling is None:
             # an isolated vertex (no face of nonzero area) still gets a pull, so the system stays regular
-            areas = np.maximum(areas / areas.sum(), 1e-3 / n)
+            areas = np.maximum(areas / areas.sum(), ISOLATED_PULL / n)
             self._pull = areas / length ** 2
             system = sp.diags(degree + self._pull) - self._weights
         else:
@@ -77,9 +82,9 @@ class ArapDeformation:
             self._sample_pull = areas / areas.sum() / length ** 2
             pulled = sampling.T @ sp.diags(self._sample_pull) @ sampling
             # each vertex's share of the pull; a vertex that no point reaches is held, faintly
-            # (the floor of the vertex case), at rest, so the system stays regular
+            # (the floor of the vertex case), so that the system stays regular
             self._reach = sampling.T @ self._sample_pull
-            self._floor = np.where(self._reach > 0, 0.0, 1e-3 / n / length ** 2)
+            self._floor = np.where(self._reach > 0, 0.0, ISOLATED_PULL / n / length ** 2)
             system = sp.diags(degree + self._floor) - self._weights + pulled
         self._solve = splu(system.tocsc()).solve
 
@@ -87,7 +92,7 @@ class ArapDeformation:
         """``(n, 3)``: positions after ``iterations`` local-global steps towards ``targets (n, 3)``
         (``(m, 3)`` with a ``sampling``), starting from ``start (n, 3)`` (default: the targets;
         with a sampling, each vertex at the mean of the targets of the points it carries, by
-        weight, or at rest where none). Time per step O(n) beside one solve with the
+        weight, or where none, at rest moved by the others' mean move). Time per step O(n) beside one solve with the
         factorization built at construction (its fill-in grows a little faster than n: about
         0.2 s to build at 52k vertices)."""
         targets = np.asarray(targets, dtype=np.float64)
@@ -97,7 +102,11 @@ class ArapDeformation:
         else:
             pulled = self._sampling.T @ (self._sample_pull[:, None] * targets)
             reached = self._reach > 0
-            mean = np.where(reached[:, None], pulled / np.where(reached, self._reach, 1.0)[:, None], self._vertices)
+            mean = pulled / np.where(reached, self._reach, 1.0)[:, None]
+            # a vertex no point reaches: at rest, moved as the reached ones moved on average (so
+            # that where the targets lie does not matter)
+            shift = (mean[reached] - self._vertices[reached]).mean(axis=0) if reached.any() else np.zeros(3)
+            mean = np.where(reached[:, None], mean, self._vertices + shift)
             positions = mean if start is None else np.asarray(start, dtype=np.float64)
             pulled = pulled + self._floor[:, None] * mean
         for _ in range(iterations):
