@@ -10,10 +10,10 @@ weights, clamped at 0; ``R_i`` the best rotation of vertex i's one-ring;
 the vertices (``sampling``): the pull is then ``(2 / length^2) sum_s a_s |(P y)_s - t_s|^2`` over
 points ``P y``, each a barycentric combination of vertices, with areas ``a_s`` of their own. A
 coarse copy of a large mesh deformed so that the full mesh's vertices, carried on it, meet their
-targets: the same energy's data term at a tenth of the unknowns. Both terms are areas times squared lengths, so the
-balance does not depend on the mesh's scale or resolution: the mesh follows the targets on
-scales beyond about ``length`` (in sqrt(area) units) and keeps its own shape below it, bends
-included, since each one-ring may turn. It is minimized by local-global iterations: each one-ring's
+targets: the same energy's data term with the copy's unknowns (a ninth of a 52k-vertex mesh's).
+Both terms are areas times squared lengths, so the balance does not depend on the mesh's scale
+or resolution: the mesh follows the targets on scales beyond about ``length`` (in sqrt(area)
+units) and keeps its own shape below it, bends included, since each one-ring may turn. It is minimized by local-global iterations: each one-ring's
 rotation from a 3x3 SVD (libigl), then one sparse solve for the positions, whose matrix is factorized once.
 
 libigl's ``arap`` holds chosen vertices fixed (hard constraints); a dense map's images are each
@@ -92,9 +92,9 @@ class ArapDeformation:
         """``(n, 3)``: positions after ``iterations`` local-global steps towards ``targets (n, 3)``
         (``(m, 3)`` with a ``sampling``), starting from ``start (n, 3)`` (default: the targets;
         with a sampling, each vertex at the mean of the targets of the points it carries, by
-        weight, or where none, at rest moved by the others' mean move). Time per step O(n) beside one solve with the
-        factorization built at construction (its fill-in grows a little faster than n: about
-        0.2 s to build at 52k vertices)."""
+        weight, or where none, at rest moved by the others' mean move). Time per step O(n)
+        beside one solve with the factorization built at construction (its fill-in grows a
+        little faster than n: about 0.2 s to build at 52k vertices)."""
         targets = np.asarray(targets, dtype=np.float64)
         if self._sampling is None:
             positions = targets.copy() if start is None else np.asarray(start, dtype=np.float64)
