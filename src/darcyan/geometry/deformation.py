@@ -13,8 +13,9 @@ coarse copy of a large mesh deformed so that the full mesh's vertices, carried o
 targets: the same energy's data term with the copy's unknowns (a ninth of a 52k-vertex mesh's).
 Both terms are areas times squared lengths, so the balance does not depend on the mesh's scale
 or resolution: the mesh follows the targets on scales beyond about ``length`` (in sqrt(area)
-units) and keeps its own shape below it, bends included, since each one-ring may turn. It is minimized by local-global iterations: each one-ring's
-rotation from a 3x3 SVD (libigl), then one sparse solve for the positions, whose matrix is factorized once.
+units) and keeps its own shape below it, bends included, since each one-ring may turn. It is
+minimized by local-global iterations: each one-ring's rotation from a 3x3 SVD (libigl), then
+one sparse solve for the positions, whose matrix is factorized once.
 
 libigl's ``arap`` holds chosen vertices fixed (hard constraints); a dense map's images are each
 a vertex or two off, so here every vertex is pulled towards its target softly instead.
