@@ -38,8 +38,8 @@ def test_bad_sampling_is_a_config_error():
         DenseConfig(sampling="poisson")
 
 
-def test_start_in_doubt_and_rival_by_checks_are_true_or_false():
-    for name in ("start_in_doubt", "rival_by_checks"):
+def test_the_rivals_switches_are_true_or_false():
+    for name in ("start_in_doubt", "rival_by_checks", "rival_sure_matching"):
         for bad in ("false", 0, None):
             with pytest.raises(ConfigError, match=f"{name} must be true or false"):
                 DenseConfig(**{name: bad})

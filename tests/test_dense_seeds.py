@@ -7,7 +7,7 @@ import io
 
 import numpy as np
 import pytest
-from conftest import FAST_DENSE, faust_pair, tip_correspondence
+from conftest import DENSE_MIN_RATE, DENSE_SCORED, FAST_DENSE, faust_pair, tip_correspondence
 
 from darcyan import DarcyanConfig
 from darcyan.cli import main
@@ -194,6 +194,38 @@ def test_a_map_that_sets_aside_a_sure_matching_is_not_trusted(figure_pair):
                                                landmark_contradiction=0.0))
         assert result.check.seed == 1 and result.check.orientation > 0.5
         assert result.check.trusted is in_doubt
+        # the sure matching's own map competed (rival_sure_matching) only when it was sure, and lost
+        assert ("sure zoomout" in result.timings) is not in_doubt
+
+
+@pytest.mark.slow
+def test_the_sure_matching_replaces_an_untrusted_alternative_by_its_checks(figure_pair, monkeypatch):
+    """The sparse matching is right and sure; its alternative (tips rolled by one: wrong) is
+    made the seed as if its short map had scored a few percent lower. Its map is wholly wrong and
+    not trusted; the sure matching's map is made, passes the trust checks, beats it on
+    orientation and residual and is taken (``SeedVerdict.by_checks``); with
+    ``rival_sure_matching`` off, or with the matching in doubt, the alternative's map stays."""
+    import darcyan.dense.seeds as seeds
+
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    right = dataclasses.replace(tip_correspondence(tips, tips), alternatives=(tip_correspondence(tips, np.roll(tips, 1)),),
+                                in_doubt=False)
+    monkeypatch.setattr(seeds, "_chosen_seed", lambda found, margin: found[-1])  # the alternative wins
+    config = dataclasses.replace(FAST_DENSE, landmarks="all", start_in_doubt=False, landmark_contradiction=0.0)
+
+    def rate(result):
+        return evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED,
+                              target_solver=shape_2.solver).rate
+
+    taken = dense_map(shape_1, shape_2, right, config)
+    assert taken.check.seed == 0 and taken.check.trusted and taken.check.verdict.by_checks
+    assert "sure zoomout" in taken.timings and rate(taken) >= DENSE_MIN_RATE
+    assert {tuple(pair) for pair in taken.landmarks.tolist()} == {(int(t), int(t)) for t in tips}  # the right tips
+    for kept in (dense_map(shape_1, shape_2, right, dataclasses.replace(config, rival_sure_matching=False)),
+                 dense_map(shape_1, shape_2, dataclasses.replace(right, in_doubt=True), config)):
+        assert kept.check.seed == 1 and not kept.check.trusted and rate(kept) < 0.2
+        assert "sure zoomout" not in kept.timings
 
 
 

@@ -501,6 +501,14 @@ class DenseConfig:
             turns the whole body round keeps the orientation and residual of a right one, and
             overturning most of a map is left to the signature.
         rival_agreement_radius: that distance, in space on the target (sqrt(area) units).
+        rival_sure_matching: when the map from an alternative matching (one the signature
+            chose over the sparse matching) is not trusted and the sparse stage was sure of its
+            own matching, that matching's map is made too, and taken when it passes the checks a
+            trusted map passes and beats the alternative's on orientation and residual (as
+            ``rival_by_checks``; ``SeedVerdict.by_checks``). An alternative that moves one
+            landmark pair to the next extremity can score a few percent lower by the signature
+            of a short map and still turn a limb or the head round
+            (``docs/decisions/every-pair.md``). Costs such a map one more map.
         landmark_contradiction: a ZoomOut map that is not trusted (from the matches, or from
             the landmarks of the start without them) has its landmark pairs checked against each
             other, before the start without landmarks competes and whether or not it does: each
@@ -574,6 +582,7 @@ class DenseConfig:
     rival_by_checks: bool = True
     rival_agreement: float = 0.5
     rival_agreement_radius: float = 0.05
+    rival_sure_matching: bool = True
     landmark_contradiction: float = 0.3
 
     def __post_init__(self) -> None:
@@ -596,7 +605,7 @@ class DenseConfig:
                 raise ConfigError(f"dense: {name} must be a positive integer, got {value!r}")
         if self.basis_start > self.basis_size:
             raise ConfigError(f"dense: basis_start ({self.basis_start}) exceeds basis_size ({self.basis_size})")
-        for name in ("start_in_doubt", "rival_by_checks"):
+        for name in ("start_in_doubt", "rival_by_checks", "rival_sure_matching"):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"dense: {name} must be true or false, got {getattr(self, name)!r}")
         for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "signature_until",

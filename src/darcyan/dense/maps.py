@@ -154,6 +154,11 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     check = _checked(shape_1, local, seed, check_of_seeds(seed, choice.seeds, config.seed_margin), residual,
                      correspondence, config)
     pairs = (seed.source, seed.target)
+    sure = _sure_matching_rival(shape_1, shape_2, choice, check, correspondence, config, say, timings)
+    if sure is not None:
+        local, residual, check, seed = sure
+        pairs = (seed.source, seed.target)
+        choice = dataclasses.replace(choice, seed=seed)
     doubted = not check.trusted and config.method == "zoomout"  # from the matches or started without them
     scored = len(choice.seeds) > 1 or seed.signature > 0  # a lone seed is not scored (0)
     if doubted and config.landmark_contradiction > 0:
@@ -217,6 +222,32 @@ def map_agreement(shape_1, shape_2, map_a: np.ndarray, map_b: np.ndarray, radius
     apart = np.linalg.norm(positions[map_a] - positions[map_b], axis=1)
     area = shape_1.vertex_areas
     return float(area[apart <= radius].sum() / area.sum())
+
+
+def _sure_matching_rival(shape_1, shape_2, choice, check: MapCheck, correspondence, config: DenseConfig, say,
+                         timings: dict) -> tuple | None:
+    """``(local (n1,), residual, check, seed)`` of the map from the sparse matching itself (seed
+    rank 0) when it is taken over the map ``check`` of an alternative the signature chose
+    (``DenseConfig.rival_sure_matching``): that map is not trusted, the sparse stage was sure of
+    its matching (``correspondence.in_doubt`` false), and the sure matching's map passes the
+    checks of a trusted map and beats the alternative's on orientation and residual
+    (:func:`_passes_checks`). ``None`` otherwise (nothing made unless the first three hold).
+    The signature scores a short map; an alternative that moves one landmark pair to a
+    neighbouring extremity can score a few percent lower and still turn a limb or the head
+    round, which the whole map's orientation and alignment show."""
+    if not (config.rival_sure_matching and config.method == "zoomout" and not check.trusted
+            and check.start == "matches" and check.seed != 0 and not getattr(correspondence, "in_doubt", True)):
+        return None
+    sure = next((s for s in choice.seeds if s.rank == 0 and s.fields_1 is not None), None)
+    if sure is None:  # the sparse matching gave no usable seed
+        return None
+    say("the sure matching's map (the alternative's is not trusted)")
+    local, residual = _map_of_seed(shape_1, shape_2, sure, config, choice, say, timings, "sure ")
+    verdict = dataclasses.replace(check_of_seeds(sure, choice.seeds, config.seed_margin), by_checks=True)
+    sure_check = _checked(shape_1, local, sure, verdict, residual, correspondence, config)
+    if _passes_checks(sure_check, check, config):
+        return local, residual, sure_check, sure
+    return None
 
 
 def _passes_checks(rival: MapCheck, chosen: MapCheck, config: DenseConfig) -> bool:

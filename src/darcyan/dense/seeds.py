@@ -113,8 +113,10 @@ class SeedVerdict:
         left_out: ``(source vertex, target vertex, displacement)`` (input numbering; sqrt(area)
             units) of the landmark pair the others contradicted (:func:`contradicted_landmark`),
             when the map made without it was taken, else ``None``.
-        by_checks: the start without landmarks won by its map's own checks (orientation and
-            residual, ``DenseConfig.rival_by_checks``), not by a clearly lower signature score.
+        by_checks: the seed's map won by its own checks (orientation and residual), not by a
+            clearly lower signature score: the start without landmarks'
+            (``DenseConfig.rival_by_checks``) or the sure sparse matching's over an alternative
+            (``DenseConfig.rival_sure_matching``).
     """
 
     seed: int
