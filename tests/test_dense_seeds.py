@@ -221,6 +221,9 @@ def test_the_sure_matching_replaces_an_untrusted_alternative_by_its_checks(figur
     taken = dense_map(shape_1, shape_2, right, config)
     assert taken.check.seed == 0 and taken.check.trusted and taken.check.verdict.by_checks
     assert "sure zoomout" in taken.timings and rate(taken) >= DENSE_MIN_RATE
+    from darcyan.cli import _seed_verdict
+
+    assert "the feature matches' own map agrees better" in _seed_verdict(taken.check.as_dict())
     assert {tuple(pair) for pair in taken.landmarks.tolist()} == {(int(t), int(t)) for t in tips}  # the right tips
     for kept in (dense_map(shape_1, shape_2, right, dataclasses.replace(config, rival_sure_matching=False)),
                  dense_map(shape_1, shape_2, dataclasses.replace(right, in_doubt=True), config)):
