@@ -204,7 +204,8 @@ def test_the_sure_matching_replaces_an_untrusted_alternative_by_its_checks(figur
     made the seed as if its short map had scored a few percent lower. Its map is wholly wrong and
     not trusted; the sure matching's map is made, passes the trust checks, beats it on
     orientation and residual and is taken (``SeedVerdict.by_checks``); with
-    ``rival_sure_matching`` off, or with the matching in doubt, the alternative's map stays."""
+    ``rival_sure_matching`` off, with the matching in doubt, or without alignment, the
+    alternative's map stays."""
     import darcyan.dense.seeds as seeds
 
     shape_1, shape_2, _ = figure_pair
@@ -226,7 +227,9 @@ def test_the_sure_matching_replaces_an_untrusted_alternative_by_its_checks(figur
     assert "the feature matches' own map agrees better" in _seed_verdict(taken.check.as_dict())
     assert {tuple(pair) for pair in taken.landmarks.tolist()} == {(int(t), int(t)) for t in tips}  # the right tips
     for kept in (dense_map(shape_1, shape_2, right, dataclasses.replace(config, rival_sure_matching=False)),
-                 dense_map(shape_1, shape_2, dataclasses.replace(right, in_doubt=True), config)):
+                 dense_map(shape_1, shape_2, dataclasses.replace(right, in_doubt=True), config),
+                 # without alignment no residual could pass the checks: the map is not even made
+                 dense_map(shape_1, shape_2, right, dataclasses.replace(config, alignment_rounds=0))):
         assert kept.check.seed == 1 and not kept.check.trusted and rate(kept) < 0.2
         assert "sure zoomout" not in kept.timings
 

@@ -282,7 +282,7 @@ def _seed_verdict(about: dict) -> str:
         return (f"started without the feature matches (fewer than 3 consistent ones): landmarks from a short map "
                 f"started from {start_from}; the feature matches are read from the map")
     if about.get("start", "matches") == "matches" and about["seed"] == 0 and about.get("by_checks"):
-        return ("the feature matches hold: an alternative matching's short map kept the shapes' curvature a little "
+        return ("the feature matches hold: an alternative matching's short map kept the shapes' curvature "
                 "better, but its map was not trusted, and the feature matches' own map agrees better with its "
                 "landmarks' orientation and is followed more closely by the alignment")
     lost = ""

@@ -503,12 +503,14 @@ class DenseConfig:
         rival_agreement_radius: that distance, in space on the target (sqrt(area) units).
         rival_sure_matching: when the map from an alternative matching (one the signature
             chose over the sparse matching) is not trusted and the sparse stage was sure of its
-            own matching, that matching's map is made too, and taken when it passes the checks a
-            trusted map passes and beats the alternative's on orientation and residual (as
-            ``rival_by_checks``; ``SeedVerdict.by_checks``). An alternative that moves one
-            landmark pair to the next extremity can score a few percent lower by the signature
-            of a short map and still turn a limb or the head round
-            (``docs/decisions/every-pair.md``). Costs such a map one more map.
+            own matching, that matching's map is made too (ZoomOut with alignment only), and
+            taken when it passes the checks a trusted map passes and beats the alternative's on
+            orientation and residual (the checks of ``rival_by_checks``, without its
+            ``rival_agreement``: the sure matching has passed the sparse stage's judges;
+            ``SeedVerdict.by_checks``). An alternative that moves one landmark pair to the next
+            extremity can score a few percent lower by the signature of a short map and still
+            turn a limb or the head round (``docs/decisions/every-pair.md``). Costs such a map
+            one more map.
         landmark_contradiction: a ZoomOut map that is not trusted (from the matches, or from
             the landmarks of the start without them) has its landmark pairs checked against each
             other, before the start without landmarks competes and whether or not it does: each

@@ -3,7 +3,9 @@
 :func:`dense_map` puts the parts together, each in a module of its own:
 
 1. the seed (:mod:`darcyan.dense.seeds`): the sparse matching or one of its alternatives, the
-   one whose short ZoomOut best keeps the curvature signature (:mod:`darcyan.dense.signatures`),
+   one whose short ZoomOut best keeps the curvature signature (:mod:`darcyan.dense.signatures`;
+   when an alternative's map is not trusted and the sparse stage was sure of its matching, that
+   matching's own map is taken if its checks beat it, ``DenseConfig.rival_sure_matching``),
    or, when none gives three consistent landmarks, the landmarks of a short map started from
    the spectra or the axes of inertia (:mod:`darcyan.dense.start`); when the map from the
    matches (or from that start) is not trusted, a landmark pair the others contradict is left
@@ -226,17 +228,24 @@ def map_agreement(shape_1, shape_2, map_a: np.ndarray, map_b: np.ndarray, radius
 
 def _sure_matching_rival(shape_1, shape_2, choice, check: MapCheck, correspondence, config: DenseConfig, say,
                          timings: dict) -> tuple | None:
-    """``(local (n1,), residual, check, seed)`` of the map from the sparse matching itself (seed
-    rank 0) when it is taken over the map ``check`` of an alternative the signature chose
+    """``(local (n1,), residual (sqrt(area) units), check, seed)`` of the map from the sparse
+    matching itself (seed rank 0) when it is taken over the map ``check`` of an alternative the
+    signature chose
     (``DenseConfig.rival_sure_matching``): that map is not trusted, the sparse stage was sure of
     its matching (``correspondence.in_doubt`` false), and the sure matching's map passes the
     checks of a trusted map and beats the alternative's on orientation and residual
-    (:func:`_passes_checks`). ``None`` otherwise (nothing made unless the first three hold).
-    The signature scores a short map; an alternative that moves one landmark pair to a
-    neighbouring extremity can score a few percent lower and still turn a limb or the head
-    round, which the whole map's orientation and alignment show."""
-    if not (config.rival_sure_matching and config.method == "zoomout" and not check.trusted
-            and check.start == "matches" and check.seed != 0 and not getattr(correspondence, "in_doubt", True)):
+    (:func:`_passes_checks`; such a map is then trusted). ``None`` otherwise (nothing made
+    unless the first three hold, with ZoomOut and its alignment). The signature scores a short
+    map; an alternative that moves one landmark pair to a neighbouring extremity can score a
+    few percent lower and still turn a limb or the head round, which the whole map's
+    orientation and alignment show. Unlike the start without landmarks
+    (``DenseConfig.rival_agreement``), the two maps need not agree on part of the surface: the
+    sure matching has passed the sparse stage's own judges, and the map it replaces may be
+    wrong over most of the body."""
+    # (without alignment the residuals are NaN and the checks never pass: no map is made)
+    if not (config.rival_sure_matching and config.method == "zoomout" and config.alignment_rounds > 0
+            and not check.trusted and check.start == "matches" and check.seed != 0
+            and not getattr(correspondence, "in_doubt", True)):
         return None
     sure = next((s for s in choice.seeds if s.rank == 0 and s.fields_1 is not None), None)
     if sure is None:  # the sparse matching gave no usable seed
@@ -251,10 +260,11 @@ def _sure_matching_rival(shape_1, shape_2, choice, check: MapCheck, corresponden
 
 
 def _passes_checks(rival: MapCheck, chosen: MapCheck, config: DenseConfig) -> bool:
-    """Whether the start without landmarks' map ``rival`` replaces the map from the matches
-    ``chosen`` although the signature did not choose it (``DenseConfig.rival_by_checks``): it
-    passes the orientation and residual conditions of :func:`trusted` and beats ``chosen`` on
-    both (without alignment, NaN residuals: never)."""
+    """Whether the map ``rival`` replaces ``chosen`` although the signature did not choose it
+    (the start without landmarks' map, ``DenseConfig.rival_by_checks``, or the sure sparse
+    matching's, ``DenseConfig.rival_sure_matching``): it passes the orientation and residual
+    conditions of :func:`trusted` and beats ``chosen`` on both (without alignment, NaN
+    residuals: never)."""
     return (rival.orientation >= config.trust_orientation and rival.residual <= config.trust_residual
             and rival.orientation > chosen.orientation and rival.residual < chosen.residual)
 
