@@ -161,3 +161,58 @@ def test_mirror_agreement_is_zero_for_the_true_mirror(unit_sphere):
     samples = np.arange(0, mesh.n_vertices, 1500)
     np.testing.assert_allclose(mirror_agreement(solver, mirror, samples, mirror[samples]), 0.0)
     assert mirror_agreement(solver, np.arange(mesh.n_vertices), samples, mirror[samples]).max() > 0.1
+
+
+@pytest.mark.parametrize("mesh_of", [lambda: synthetic.figure(1, subdivisions=4), lambda: synthetic.torus(nu=120, nv=60)])
+def test_scores_read_on_geodesic_balls_are_those_of_whole_fast_marchings(mesh_of, monkeypatch):
+    """A large target is scored through geodesic balls cut by Euclidean distance around each
+    true correspondent (``BALL_SCORING_ABOVE``): the errors are the whole mesh's fast-marching
+    ones bit for bit, for a right map (no whole field made at all), a map with a tenth of its
+    vertices sent anywhere (those fall back on the whole field) and one sent a few rings away,
+    on a figure whose limbs pass near its body and on a torus (near across its hole)."""
+    import darcyan.eval.dense_scores as scores
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(mesh_of())
+    mesh, solver = shape.mesh, shape.solver
+    n = shape.n_input_vertices
+    rng = np.random.default_rng(3)
+    noisy = np.arange(n)
+    moved = rng.choice(n, n // 10, replace=False)
+    noisy[moved] = rng.integers(0, n, len(moved))
+    near = mesh.input_index[mesh.edges()[:, 1]]  # each edge's first end sent to its other end
+    shifted = np.arange(n)
+    shifted[mesh.input_index[mesh.edges()[:, 0]]] = near
+    maps = {"right": np.arange(n), "noisy": noisy, "shifted": shifted}
+    whole = scores.evaluate_dense_maps(mesh, mesh, maps, sample=150, target_solver=solver)
+    fields = []
+    real = solver.distance
+    monkeypatch.setattr(solver, "distance", lambda v: fields.append(v) or real(v))
+    monkeypatch.setattr(scores, "BALL_SCORING_ABOVE", 0)
+    on_balls = scores.evaluate_dense_maps(mesh, mesh, {"right": maps["right"]}, sample=150, target_solver=solver)
+    assert not fields and on_balls["right"].errors.max() == 0.0  # no whole field for a right map
+    on_balls = scores.evaluate_dense_maps(mesh, mesh, maps, sample=150, target_solver=solver)
+    assert 0 < len(fields) < 150  # the noisy map's far images, not every sample
+    for name in maps:
+        np.testing.assert_array_equal(on_balls[name].errors, whole[name].errors)
+    assert whole["noisy"].errors.max() > 5 * scores.BALL_SCORING_RADIUS  # errors far beyond the balls were read
+    assert 0 < np.median(whole["shifted"].errors) <= scores.BALL_SCORING_RADIUS
+    # only a ball's values within its radius are read (beyond it fast marching on the piece may
+    # exceed the whole mesh's: here made so, and the errors stay the whole mesh's)
+    import dataclasses
+
+    from darcyan.geometry.geodesics import LocalGeodesicSolver
+
+    cut = LocalGeodesicSolver.ball
+
+    def off_beyond(self, vertex, keep=True):
+        ball = cut(self, vertex, keep)
+        if ball.distance is None:
+            return ball
+        return dataclasses.replace(ball, distance=np.where(ball.distance > ball.radius, ball.distance + 1.0,
+                                                           ball.distance))
+
+    monkeypatch.setattr(LocalGeodesicSolver, "ball", off_beyond)
+    skewed = scores.evaluate_dense_maps(mesh, mesh, maps, sample=150, target_solver=solver)
+    for name in maps:
+        np.testing.assert_array_equal(skewed[name].errors, whole[name].errors)

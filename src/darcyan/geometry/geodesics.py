@@ -213,11 +213,17 @@ class LocalGeodesicSolver:
         self._fields: dict[int, np.ndarray] = {}
         self._estimates: dict[int, np.ndarray] = {}
 
-    def ball(self, vertex: int) -> GeodesicBall:
-        """The :class:`GeodesicBall` of ``radius`` around ``vertex`` (built once)."""
+    def ball(self, vertex: int, keep: bool = True) -> GeodesicBall:
+        """The :class:`GeodesicBall` of ``radius`` around ``vertex`` (built once; with ``keep``
+        false, built anew and not kept, nor its estimate: for many balls asked once each)."""
         vertex = int(vertex)
-        if vertex not in self._balls:
-            self._balls[vertex] = self._cut(vertex)
+        if vertex in self._balls:
+            return self._balls[vertex]
+        if not keep:
+            ball = self._cut(vertex)
+            self._estimates.pop(vertex, None)
+            return ball
+        self._balls[vertex] = self._cut(vertex)
         return self._balls[vertex]
 
     def distance(self, vertex: int) -> np.ndarray:
