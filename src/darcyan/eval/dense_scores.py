@@ -73,7 +73,8 @@ def evaluate_dense_maps(source_mesh: Mesh, target_mesh: Mesh, targets: dict, tru
     """:func:`evaluate_dense` of several maps of one pair (``targets``: name -> map) at once: the
     same sampled source vertices for all, one fast-marching field per true correspondent read
     for every map (memory O(V); on a target of more than ``BALL_SCORING_ABOVE`` vertices a
-    geodesic ball around it, the whole field only for images beyond the ball: the same values). Returns name -> :class:`DenseEvaluation`."""
+    geodesic ball around it, the whole field only for images beyond the ball: the same values).
+    Returns name -> :class:`DenseEvaluation`."""
     if truth.source_samples is None:
         candidates = source_mesh.input_index
         true_targets = candidates
