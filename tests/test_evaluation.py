@@ -168,8 +168,8 @@ def test_scores_read_on_geodesic_balls_are_those_of_whole_fast_marchings(mesh_of
     """A large target is scored through geodesic balls cut by Euclidean distance around each
     true correspondent (``BALL_SCORING_ABOVE``): the errors are the whole mesh's fast-marching
     ones bit for bit, for a right map (no whole field made at all), a map with a tenth of its
-    vertices sent anywhere (those fall back on the whole field) and one sent a few rings away,
-    on a figure whose limbs pass near its body and on a torus (near across its hole)."""
+    vertices sent anywhere (those fall back on the whole field) and one sent a ring away, on a
+    figure whose limbs pass near its body and on a torus."""
     import darcyan.eval.dense_scores as scores
     from darcyan.geometry.shape import prepare_shape
 
