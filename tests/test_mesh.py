@@ -388,3 +388,49 @@ def test_the_fast_reader_counts_each_lines_tokens_as_splitting_it_does(text):
     expected = [len(line.split()) for line in text.splitlines() if line.split()]
     counts = _tokens_per_line(text.encode())
     assert counts is not None and counts.tolist() == expected
+
+
+@pytest.mark.parametrize("text, plain", [
+    ("OFF\n4 2 0\n0.1 -0.0 1e-3\n1.0000000000000002 2.5E+2 -7\n  +3 .5 5.\n1e308 -4.9e-324 0.30000000000000004\n"
+     "3 0 1 2\n3 0 2 3\n", True),
+    ("\n\nOFF 3 1 0\r\n  0 0 0  \r\n\r\n1 0 0\r\n0 1 0\r\n3 0 1 2", True),
+    ("OFF\n\n\n3 1\n0 0 0\n1\t0 0\n0 1 0\n\n3 0 1 2\n\n", True),
+    ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n", False),  # a face index that is not an integer
+    ("OFF\n3 1 0\n0 0 0\n1 0 x\n0 1 0\n3 0 1 2\n", False),  # a coordinate that is not a number
+    ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", False),  # a face that says it has four corners
+    ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 99999999999999999999\n", False),  # beyond int64
+])
+def test_the_fast_reader_reads_what_the_line_by_line_reader_reads(text, plain, tmp_path, monkeypatch):
+    """The vectorized OFF reader gives the line-by-line reader's arrays bit for bit (floats as
+    Python's float() reads them, -0.0 and subnormals included), and leaves every file it cannot
+    read plainly to it, whose error names the line."""
+    import darcyan.io.mesh_files as mesh_files
+
+    fast = mesh_files._read_off_fast(text.encode())
+    monkeypatch.setattr(mesh_files, "_read_off_fast", lambda data: None)
+    if not plain:
+        assert fast is None
+        with pytest.raises(MeshError, match="line"):
+            mesh_files._read_off(text.encode(), tmp_path / "a.off")
+        return
+    slow = mesh_files._read_off(text.encode(), tmp_path / "a.off")
+    assert fast is not None
+    for got, expected in zip(fast, slow):
+        assert got.dtype == np.asarray(expected).dtype
+        np.testing.assert_array_equal(got, expected)
+        assert np.array_equal(np.signbit(got), np.signbit(expected))  # -0.0 kept
+
+
+def test_the_fast_reader_reads_the_shared_meshes_as_the_line_by_line_reader(faust, monkeypatch):
+    """On a FAUST and a TOSCA file: the same arrays bit for bit."""
+    import darcyan.io.mesh_files as mesh_files
+
+    for path in (faust / "tr_reg_000.off", faust.parent / "tosca-hires" / "cat0.off"):
+        data = path.read_bytes()
+        fast = mesh_files._read_off_fast(data)
+        assert fast is not None
+        with monkeypatch.context() as patched:
+            patched.setattr(mesh_files, "_read_off_fast", lambda data: None)
+            slow = mesh_files._read_off(data, path)
+        for got, expected in zip(fast, slow):
+            np.testing.assert_array_equal(got, expected)
