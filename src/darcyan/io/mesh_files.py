@@ -248,7 +248,7 @@ def _read_off_fast(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
 def _read_off(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     """``OFF`` (or COFF, NOFF, CNOFF), the counts ``vertices faces [edges]`` (on that line or the
     next), then exactly that many vertex lines ``x y z [...]`` and face lines ``k i1 .. ik [...]``."""
-    fast = _read_off_fast(data)  # 3.5x faster on the 52k TOSCA files (0.47 -> 0.13 s, speed.py)
+    fast = _read_off_fast(data)  # the 52k TOSCA files in 0.07 s (line by line 0.47 s, speed.py)
     if fast is not None:
         return fast
     rows = _data_lines(_decode_text(data, path))
