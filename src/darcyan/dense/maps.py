@@ -230,8 +230,7 @@ def _sure_matching_rival(shape_1, shape_2, choice, check: MapCheck, corresponden
                          timings: dict) -> tuple | None:
     """``(local (n1,), residual (sqrt(area) units), check, seed)`` of the map from the sparse
     matching itself (seed rank 0) when it is taken over the map ``check`` of an alternative the
-    signature chose
-    (``DenseConfig.rival_sure_matching``): that map is not trusted, the sparse stage was sure of
+    signature chose (``DenseConfig.rival_sure_matching``): that map is not trusted, the sparse stage was sure of
     its matching (``correspondence.in_doubt`` false), and the sure matching's map passes the
     checks of a trusted map and beats the alternative's on orientation and residual
     (:func:`_passes_checks`; such a map is then trusted). ``None`` otherwise (nothing made
@@ -247,7 +246,8 @@ def _sure_matching_rival(shape_1, shape_2, choice, check: MapCheck, corresponden
             and not check.trusted and check.start == "matches" and check.seed != 0
             and not getattr(correspondence, "in_doubt", True)):
         return None
-    sure = next((s for s in choice.seeds if s.rank == 0 and s.fields_1 is not None), None)
+    # (the first usable seed keeps its per-vertex arrays: seeds._without_losers)
+    sure = next((s for s in choice.seeds if s.rank == 0), None)
     if sure is None:  # the sparse matching gave no usable seed
         return None
     say("the sure matching's map (the alternative's is not trusted)")

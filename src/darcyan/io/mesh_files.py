@@ -182,16 +182,10 @@ _ASCII_SPACE[list(b" \t\n\r\x0b\x0c\x1c\x1d\x1e\x1f")] = True
 _ODD_BREAKS = b"\x0b\x0c\x1c\x1d\x1e"
 
 
-def _tokens_per_line(data: bytes) -> np.ndarray | None:
-    """Tokens on each non-empty line of a plain-ASCII text (lines ended by ``\n`` or ``\r\n``), or
-    ``None`` when the text has comments, non-ASCII bytes or unusual line breaks."""
-    layout = _token_layout(data)
-    return None if layout is None else layout[0]
-
-
 def _token_layout(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
     """``(tokens on each non-empty line, the byte offset of each token's first byte)`` of a
-    plain-ASCII text, or ``None`` as :func:`_tokens_per_line` says."""
+    plain-ASCII text (lines ended by ``\n`` or ``\r\n``), or ``None`` when the text has
+    comments, non-ASCII bytes or unusual line breaks."""
     if b"#" in data or data.count(b"\r") != data.count(b"\r\n"):
         return None
     b = np.frombuffer(data, np.uint8)
