@@ -27,12 +27,30 @@ def main(argv: list | None = None) -> int:
     args = parser.parse_args(argv)
     import darcyan.eval.dense_scores as scores
     from darcyan.config import DarcyanConfig
+    from darcyan.errors import DarcyanError
     from darcyan.geometry.shape import prepare_shape
     from darcyan.io.mesh_files import load_mesh
 
-    shapes = [prepare_shape(load_mesh(path), DarcyanConfig(), False) for path in (args.source, args.target)]
-    rows = np.loadtxt(args.map, delimiter=",", skiprows=1, dtype=np.int64, ndmin=2)
-    target = np.full(shapes[0].n_input_vertices, -1, dtype=np.int64)
+    try:
+        shapes = [prepare_shape(load_mesh(path), DarcyanConfig(), False) for path in (args.source, args.target)]
+    except DarcyanError as exc:
+        print(f"score_time: {exc}", file=sys.stderr)
+        return 1
+    try:
+        rows = np.loadtxt(args.map, delimiter=",", skiprows=1, dtype=np.int64, ndmin=2)
+    except (OSError, ValueError) as exc:
+        print(f"score_time: {args.map}: not a map written by darcyan match --dense ({exc})", file=sys.stderr)
+        return 1
+    sizes = (shapes[0].n_input_vertices, shapes[1].n_input_vertices)
+    if rows.shape[1] != 2:
+        print(f"score_time: {args.map}: expected two columns (source_vertex,target_vertex), found "
+              f"{rows.shape[1]}", file=sys.stderr)
+        return 1
+    if ((rows < 0) | (rows >= sizes)).any():
+        print(f"score_time: {args.map}: vertex indices out of range for {args.source} and {args.target}",
+              file=sys.stderr)
+        return 1
+    target = np.full(sizes[0], -1, dtype=np.int64)
     target[rows[:, 0]] = rows[:, 1]
     above = scores.BALL_SCORING_ABOVE
     errors = {}
