@@ -122,6 +122,21 @@ def test_the_seed_verdict_says_how_the_map_was_started():
     assert "clearly better" not in said and "scores close" not in said
 
 
+def test_the_seed_verdict_says_the_map_was_made_on_copies_cut_open_at_their_handles():
+    import dataclasses
+
+    from darcyan.cli import _seed_verdict
+    from darcyan.dense.seeds import seed_check
+
+    plain = seed_check(0, {0: 0.10, 1: 0.20}, 0.04)
+    cut = dataclasses.replace(plain, handles_cut=3).as_dict()
+    said = _seed_verdict(cut)
+    assert said.startswith(_seed_verdict(plain.as_dict()))  # the seed's verdict, then how the shapes were cut
+    assert "cut open at 3 handles" in said and "the map on the meshes as given was not trusted" in said
+    assert "cut open at 1 handle (" in _seed_verdict(dataclasses.replace(plain, handles_cut=1).as_dict())
+    assert "cut open" not in _seed_verdict(plain.as_dict())
+
+
 def test_the_seed_verdict_names_a_landmark_pair_left_out():
     """A verdict with ``left_out`` (kept in JSON records as a list) says which pair went, how far
     the others sent it, and that the feature matches are read from the map."""

@@ -329,3 +329,89 @@ def test_a_map_not_trusted_says_which_conditions_it_fails(capsys):
                                                               check=made), None, None)
     err = capsys.readouterr().err
     assert "dense map not trusted (its orientation agrees with its landmarks by 0.10" in err and "; the alignment" in err
+
+
+def _thin_torus_shape():
+    """A prepared torus with one short handle: its tube 2 pi 0.005 round, 0.071 sqrt(area) (the
+    torus's area 4 pi^2 0.005)."""
+    from darcyan.geometry.shape import prepare_shape
+
+    return prepare_shape(synthetic.torus(1.0, 0.005, nu=150, nv=8))
+
+
+@pytest.mark.slow
+def test_the_dense_shape_is_the_shape_cut_open_at_its_short_handles_with_its_numbering(sphere):
+    from darcyan.dense.maps import dense_shape
+    from darcyan.geometry.handles import genus
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = _thin_torus_shape()
+    assert dense_shape(shape, DenseConfig(handle_length=0.06)) is shape  # no loop that short
+    config = DenseConfig(handle_length=0.08)
+    cut = dense_shape(shape, config)
+    assert cut is not shape and dense_shape(shape, config) is cut  # made once per shape
+    assert genus(shape.mesh) == 1 and genus(cut.mesh) == 0
+    n = shape.mesh.n_vertices
+    assert n < cut.mesh.n_vertices <= n + 8 + 2  # one copy per vertex of a loop around the tube
+    np.testing.assert_array_equal(cut.mesh.vertices[:n], shape.mesh.vertices)  # the same vertices first
+    np.testing.assert_array_equal(cut.mesh.input_index[:n], shape.mesh.input_index)
+    copies = cut.mesh.input_index[n:]
+    np.testing.assert_array_equal(cut.mesh.vertices[n:], shape.mesh.vertices[shape.mesh_index(copies)])
+    assert cut.mesh.area() == pytest.approx(shape.mesh.area(), rel=1e-9)
+    np.testing.assert_array_equal(cut.mesh_index(np.arange(shape.n_input_vertices)),
+                                  shape.mesh_index(np.arange(shape.n_input_vertices)))
+    assert dense_shape(shape, DenseConfig(handle_length=0)) is shape  # switched off
+    assert dense_shape(prepare_shape(sphere), config).mesh.n_vertices == prepare_shape(sphere).mesh.n_vertices
+
+
+def test_an_untrusted_map_is_made_again_on_the_copies_cut_open_and_taken_when_its_checks_are_better(monkeypatch):
+    import types
+
+    import darcyan.dense.maps as maps
+    from darcyan.dense.seeds import seed_check
+
+    made = []
+
+    def fake_shape(name, vertices=5000):
+        return types.SimpleNamespace(name=name, mesh=types.SimpleNamespace(n_vertices=vertices))
+
+    def fake_map(orientation, residual, trusted=False):
+        check = maps.MapCheck(orientation, 0.01, seed_check(0, {0: 1.0}, 0.04), trusted=trusted, residual=residual)
+        return maps.DenseMap(np.zeros(3, np.int64), np.zeros((0, 2), np.int64), {}, check)
+
+    def run(first, on_cut, cuts=(2, 0), config=DenseConfig(), vertices=5000):
+        made.clear()
+        cut = dict(zip("AB", cuts))
+        monkeypatch.setattr(maps, "_cut_open", lambda shape, config: (fake_shape(f"cut {shape.name}"), cut[shape.name])
+                            if cut[shape.name] else (shape, 0))
+        monkeypatch.setattr(maps, "_dense_map", lambda a, b, *args: made.append((a.name, b.name)) or
+                            (on_cut if "cut" in a.name + b.name else first))
+        return maps.dense_map(fake_shape("A"), fake_shape("B", vertices), None, config)
+
+    untrusted, better = fake_map(0.3, 0.015), fake_map(0.5, 0.012)
+    taken = run(untrusted, better)  # the defaults: cut below 0.05 between meshes of at most 12,000 vertices
+    assert made == [("A", "B"), ("cut A", "B")]
+    np.testing.assert_array_equal(taken.target, better.target)
+    assert taken.check.orientation == 0.5 and taken.check.verdict.handles_cut == 2
+    assert taken.check.verdict.as_dict()["handles_cut"] == 2 and "handles cut" in taken.timings
+    assert "handles_cut" not in untrusted.check.verdict.as_dict()
+    for worse in (fake_map(0.2, 0.012), fake_map(0.5, 0.02), fake_map(0.5, float("nan"))):
+        assert run(untrusted, worse) is untrusted and len(made) == 2  # made, and not taken
+    trusted = fake_map(0.8, 0.005, trusted=True)
+    assert run(trusted, better) is trusted and made == [("A", "B")]  # a trusted map is left alone
+    assert run(untrusted, better, cuts=(0, 0)) is untrusted and len(made) == 1  # no handle to cut
+    assert run(untrusted, better, cuts=(0, 1)).check.verdict.handles_cut == 1 and made[1] == ("A", "cut B")
+    assert run(untrusted, better, config=DenseConfig(handle_length=0)) is untrusted and len(made) == 1  # off
+    assert run(untrusted, better, vertices=12001) is untrusted and len(made) == 1  # a mesh too large to search
+    assert run(untrusted, better, vertices=12001, config=DenseConfig(handle_max_vertices=20000)) is not untrusted
+
+
+@pytest.mark.slow
+def test_a_map_between_shapes_without_handles_is_the_same_with_the_cut_switched_on(figure_pair):
+    source, target, correspondence = figure_pair
+    off = dense_map(source, target, correspondence, dataclasses.replace(FAST_DENSE, trust_orientation=1.0))
+    on = dense_map(source, target, correspondence,
+                   dataclasses.replace(FAST_DENSE, trust_orientation=1.0, handle_length=0.05))
+    assert not off.check.trusted  # so that the cut is looked for
+    np.testing.assert_array_equal(on.target, off.target)
+    assert "handles cut" not in on.timings

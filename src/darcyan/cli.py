@@ -265,7 +265,18 @@ def _output_format(args: argparse.Namespace) -> str:
 
 def _seed_verdict(about: dict) -> str:
     """What the seed check (a :class:`~darcyan.dense.seeds.SeedVerdict` as a dict:
-    ``DenseMap.check.verdict`` or ``verified_matches``' second result) decided."""
+    ``DenseMap.check.verdict`` or ``verified_matches``' second result) decided, and whether the map
+    was made on copies cut open at their handles."""
+    cuts = about.get("handles_cut", 0)
+    if not cuts:
+        return _seed_choice(about)
+    return (_seed_choice(about) + f"; made on copies of the shapes cut open at {cuts} handle{'s' * (cuts > 1)} "
+            f"(parts joined where they touch?): the map on the meshes as given was not trusted, and this one "
+            f"agrees better with its landmarks' orientation and is followed more closely by the alignment")
+
+
+def _seed_choice(about: dict) -> str:
+    """Which seed the seed check chose, and how plainly (:func:`_seed_verdict`)."""
     start_from = about.get("start_from", "the spectra")
     close = "" if about["clear"] else "; another candidate scores close: look at the matches (--plot)"
     rival = about.get("rival")

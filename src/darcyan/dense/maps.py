@@ -148,6 +148,60 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
             trusted meets that start too (:func:`~darcyan.dense.seeds.rival_start`).
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
+    result = _dense_map(shape_1, shape_2, correspondence, config, progress)
+    if (result.check.trusted or config.handle_length <= 0 or config.method != "zoomout"
+            or max(shape_1.mesh.n_vertices, shape_2.mesh.n_vertices) > config.handle_max_vertices):
+        return result
+    t = time.perf_counter()
+    (cut_1, cuts_1), (cut_2, cuts_2) = _cut_open(shape_1, config), _cut_open(shape_2, config)
+    if cuts_1 + cuts_2 == 0:
+        return result
+    (progress or (lambda stage: None))("handles cut open (the map is not trusted)")
+    rival = _dense_map(cut_1, cut_2, correspondence, config, progress)
+    # The same judges as the start without landmarks' (rival_by_checks), without its trust
+    # thresholds: a map on a surface joined where it touches rarely passes them either way.
+    taken = rival.check.orientation > result.check.orientation and rival.check.residual < result.check.residual
+    if taken:
+        verdict = dataclasses.replace(rival.check.verdict, handles_cut=cuts_1 + cuts_2)
+        result = dataclasses.replace(rival, check=dataclasses.replace(rival.check, verdict=verdict))
+    result.timings["handles cut"] = time.perf_counter() - t
+    return result
+
+
+def dense_shape(shape, config: DenseConfig):
+    """The shape a dense map with ``config`` makes its second map on when its first is not
+    trusted: ``shape`` itself, or, with ``config.handle_length`` > 0 and handles on its surface, a
+    copy cut open along the shortest loop around each handle shorter than that length
+    (:func:`~darcyan.geometry.repair.cut_handles`; the small holes it leaves capped as
+    :func:`~darcyan.geometry.repair.prepare_mesh` caps them). The copy has the same vertices
+    first, in the same order, and a copy appended for each vertex of a loop (its
+    ``input_index`` the original's), so that the feature points, the input numbering and a map
+    read out on it are those of ``shape``. Made once per shape
+    (:meth:`~darcyan.geometry.shape.Shape.derived`)."""
+    return _cut_open(shape, config)[0]
+
+
+def _cut_open(shape, config: DenseConfig) -> tuple:
+    """``(dense_shape(shape, config), handles cut)``."""
+    if config.handle_length <= 0:
+        return shape, 0
+
+    def compute():
+        from ..config import Repairing
+        from ..geometry.repair import cut_handles, fill_small_holes
+
+        settings = Repairing()
+        mesh, lengths, _ = cut_handles(shape.mesh, config.handle_length, settings.handle_roots)
+        if not lengths:
+            return shape, 0
+        mesh, _, _, _ = fill_small_holes(mesh, settings.hole_length, settings.hole_edges,
+                                         degenerate_area=settings.degenerate_area)
+        return dataclasses.replace(shape, mesh=mesh, _memo={}), len(lengths)
+
+    return shape.derived(("cut open", config.handle_length), compute)
+
+
+def _dense_map(shape_1, shape_2, correspondence, config: DenseConfig, progress) -> DenseMap:
     say = progress or (lambda stage: None)
     timings: dict = {}
     choice = choose_seed(shape_1, shape_2, correspondence, config, say, timings)

@@ -117,6 +117,9 @@ class SeedVerdict:
             clearly lower signature score: the start without landmarks'
             (``DenseConfig.rival_by_checks``) or the sure sparse matching's over an alternative
             (``DenseConfig.rival_sure_matching``).
+        handles_cut: how many handles the map's shapes were cut open at: the map made on copies
+            cut open (``DenseConfig.handle_length``) was taken over the map on the shapes as
+            given, which was not trusted; 0 otherwise.
     """
 
     seed: int
@@ -130,13 +133,16 @@ class SeedVerdict:
     rival: int | None = None
     left_out: tuple | None = None
     by_checks: bool = False
+    handles_cut: int = 0
 
     def as_dict(self) -> dict:
-        """The fields as a dict (``start_from``, ``rival``, ``left_out`` and ``by_checks`` only when
-        set), as JSON records keep them."""
+        """The fields as a dict (``start_from``, ``rival``, ``left_out``, ``by_checks`` and
+        ``handles_cut`` only when set), as JSON records keep them."""
         fields = dataclasses.asdict(self)
         if not self.by_checks:
             del fields["by_checks"]
+        if not self.handles_cut:
+            del fields["handles_cut"]
         if not self.start_from:
             del fields["start_from"]
         if self.rival is None:
