@@ -361,7 +361,8 @@ def test_the_dense_shape_is_the_shape_cut_open_at_its_short_handles_with_its_num
     np.testing.assert_array_equal(cut.mesh_index(np.arange(shape.n_input_vertices)),
                                   shape.mesh_index(np.arange(shape.n_input_vertices)))
     assert dense_shape(shape, DenseConfig(handle_length=0)) is shape  # switched off
-    assert dense_shape(prepare_shape(sphere), config).mesh.n_vertices == prepare_shape(sphere).mesh.n_vertices
+    round_shape = prepare_shape(sphere)
+    assert dense_shape(round_shape, config) is round_shape
 
 
 def test_an_untrusted_map_is_made_again_on_the_copies_cut_open_and_taken_when_its_checks_are_better(monkeypatch):
@@ -394,6 +395,7 @@ def test_an_untrusted_map_is_made_again_on_the_copies_cut_open_and_taken_when_it
     np.testing.assert_array_equal(taken.target, better.target)
     assert taken.check.orientation == 0.5 and taken.check.verdict.handles_cut == 2
     assert taken.check.verdict.as_dict()["handles_cut"] == 2 and "handles cut" in taken.timings
+    assert taken.timings is untrusted.timings  # the first map's stages, and the second chance's cost
     assert "handles_cut" not in untrusted.check.verdict.as_dict()
     for worse in (fake_map(0.2, 0.012), fake_map(0.5, 0.02), fake_map(0.5, float("nan"))):
         assert run(untrusted, worse) is untrusted and len(made) == 2  # made, and not taken
@@ -401,6 +403,10 @@ def test_an_untrusted_map_is_made_again_on_the_copies_cut_open_and_taken_when_it
     assert run(trusted, better) is trusted and made == [("A", "B")]  # a trusted map is left alone
     assert run(untrusted, better, cuts=(0, 0)) is untrusted and len(made) == 1  # no handle to cut
     assert run(untrusted, better, cuts=(0, 1)).check.verdict.handles_cut == 1 and made[1] == ("A", "cut B")
+    assert run(untrusted, better, cuts=(2, 1)).check.verdict.handles_cut == 3 and made[1] == ("cut A", "cut B")
+    assert run(untrusted, fake_map(0.3, 0.012)) is untrusted  # a tie on one check is not better
+    assert run(untrusted, better, config=DenseConfig(method="pyfm")) is untrusted and len(made) == 1
+    assert run(untrusted, better, config=DenseConfig(alignment_rounds=0)) is untrusted and len(made) == 1
     assert run(untrusted, better, config=DenseConfig(handle_length=0)) is untrusted and len(made) == 1  # off
     assert run(untrusted, better, vertices=12001) is untrusted and len(made) == 1  # a mesh too large to search
     assert run(untrusted, better, vertices=12001, config=DenseConfig(handle_max_vertices=20000)) is not untrusted
@@ -409,9 +415,11 @@ def test_an_untrusted_map_is_made_again_on_the_copies_cut_open_and_taken_when_it
 @pytest.mark.slow
 def test_a_map_between_shapes_without_handles_is_the_same_with_the_cut_switched_on(figure_pair):
     source, target, correspondence = figure_pair
-    off = dense_map(source, target, correspondence, dataclasses.replace(FAST_DENSE, trust_orientation=1.0))
+    off = dense_map(source, target, correspondence,
+                    dataclasses.replace(FAST_DENSE, trust_orientation=1.0, handle_length=0))
     on = dense_map(source, target, correspondence,
                    dataclasses.replace(FAST_DENSE, trust_orientation=1.0, handle_length=0.05))
     assert not off.check.trusted  # so that the cut is looked for
     np.testing.assert_array_equal(on.target, off.target)
-    assert "handles cut" not in on.timings
+    assert on.check.verdict.handles_cut == 0 and "handles cut" in on.timings  # looked for, none found
+    assert "handles cut" not in off.timings

@@ -529,7 +529,8 @@ class DenseConfig:
             shorter than this (sqrt(area) units; :func:`~darcyan.dense.maps.dense_shape`; the
             sparse stage keeps the shapes as they are), when either shape has one, and taken
             when it agrees better with its landmarks' orientation and its alignment follows it
-            more closely (``SeedVerdict.handles_cut``; 0: never). A body is a sphere; where
+            more closely (``SeedVerdict.handles_cut``; 0: never; never without the alignment,
+            whose residual is one of the two judges). A body is a sphere; where
             parts that touch were joined (a hand on a hip, clasped hands) the surface has a
             handle, which changes geodesics and eigenfunctions far beyond it
             (``docs/decisions/every-pair.md``). Costs such a map the search for the loops

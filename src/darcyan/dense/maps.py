@@ -149,21 +149,23 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
     result = _dense_map(shape_1, shape_2, correspondence, config, progress)
+    # Without the alignment there is no residual (NaN) to judge the second map by.
     if (result.check.trusted or config.handle_length <= 0 or config.method != "zoomout"
+            or config.alignment_rounds <= 0
             or max(shape_1.mesh.n_vertices, shape_2.mesh.n_vertices) > config.handle_max_vertices):
         return result
     t = time.perf_counter()
     (cut_1, cuts_1), (cut_2, cuts_2) = _cut_open(shape_1, config), _cut_open(shape_2, config)
-    if cuts_1 + cuts_2 == 0:
-        return result
-    (progress or (lambda stage: None))("handles cut open (the map is not trusted)")
-    rival = _dense_map(cut_1, cut_2, correspondence, config, progress)
-    # The same judges as the start without landmarks' (rival_by_checks), without its trust
-    # thresholds: a map on a surface joined where it touches rarely passes them either way.
-    taken = rival.check.orientation > result.check.orientation and rival.check.residual < result.check.residual
-    if taken:
-        verdict = dataclasses.replace(rival.check.verdict, handles_cut=cuts_1 + cuts_2)
-        result = dataclasses.replace(rival, check=dataclasses.replace(rival.check, verdict=verdict))
+    if cuts_1 + cuts_2 > 0:
+        (progress or (lambda stage: None))("handles cut open (the map is not trusted)")
+        rival = _dense_map(cut_1, cut_2, correspondence, config, progress)
+        # The same judges as the start without landmarks' (rival_by_checks), without its trust
+        # thresholds: a map on a surface joined where it touches rarely passes them either way.
+        if rival.check.orientation > result.check.orientation and rival.check.residual < result.check.residual:
+            verdict = dataclasses.replace(rival.check.verdict, handles_cut=cuts_1 + cuts_2)
+            result = dataclasses.replace(rival, timings=result.timings,
+                                         check=dataclasses.replace(rival.check, verdict=verdict))
+    # The first map's stages, and all the second chance cost (the loops' search, the second map).
     result.timings["handles cut"] = time.perf_counter() - t
     return result
 
@@ -176,8 +178,12 @@ def dense_shape(shape, config: DenseConfig):
     :func:`~darcyan.geometry.repair.prepare_mesh` caps them). The copy has the same vertices
     first, in the same order, and a copy appended for each vertex of a loop (its
     ``input_index`` the original's), so that the feature points, the input numbering and a map
-    read out on it are those of ``shape``. Made once per shape
-    (:meth:`~darcyan.geometry.shape.Shape.derived`)."""
+    read out on it are those of ``shape``. The loops' search and the capping take the default
+    :class:`~darcyan.config.Repairing` settings (``handle_roots``, ``hole_length``,
+    ``hole_edges``), not a ``--config``'s. Made once per shape
+    (:meth:`~darcyan.geometry.shape.Shape.derived`). :func:`dense_map` makes its second map on
+    it only with ZoomOut and its alignment, between meshes of at most
+    ``config.handle_max_vertices`` vertices."""
     return _cut_open(shape, config)[0]
 
 
