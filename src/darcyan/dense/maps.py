@@ -157,11 +157,12 @@ def dense_map(shape_1, shape_2, correspondence, config: DenseConfig = DenseConfi
     t = time.perf_counter()
     (cut_1, cuts_1), (cut_2, cuts_2) = _cut_open(shape_1, config), _cut_open(shape_2, config)
     if cuts_1 + cuts_2 > 0:
-        (progress or (lambda stage: None))("handles cut open (the map is not trusted)")
+        if progress:
+            progress("handles cut open (the map is not trusted)")
         rival = _dense_map(cut_1, cut_2, correspondence, config, progress)
-        # The same judges as the start without landmarks' (rival_by_checks), without its trust
+        # The judges of the start without landmarks (rival_by_checks), without its trust
         # thresholds: a map on a surface joined where it touches rarely passes them either way.
-        if rival.check.orientation > result.check.orientation and rival.check.residual < result.check.residual:
+        if _beats(rival.check, result.check):
             verdict = dataclasses.replace(rival.check.verdict, handles_cut=cuts_1 + cuts_2)
             result = dataclasses.replace(rival, timings=result.timings,
                                          check=dataclasses.replace(rival.check, verdict=verdict))
@@ -199,12 +200,13 @@ def _cut_open(shape, config: DenseConfig) -> tuple:
         settings = Repairing()
         mesh, lengths, _ = cut_handles(shape.mesh, config.handle_length, settings.handle_roots)
         if not lengths:
-            return shape, 0
+            return None, 0  # not the shape itself: its memo would hold a cycle to it
         mesh, _, _, _ = fill_small_holes(mesh, settings.hole_length, settings.hole_edges,
                                          degenerate_area=settings.degenerate_area)
         return dataclasses.replace(shape, mesh=mesh, _memo={}), len(lengths)
 
-    return shape.derived(("cut open", config.handle_length), compute)
+    cut, cuts = shape.derived(("cut open", config.handle_length), compute)
+    return (shape, 0) if cut is None else (cut, cuts)
 
 
 def _dense_map(shape_1, shape_2, correspondence, config: DenseConfig, progress) -> DenseMap:
@@ -326,7 +328,13 @@ def _passes_checks(rival: MapCheck, chosen: MapCheck, config: DenseConfig) -> bo
     conditions of :func:`trusted` and beats ``chosen`` on both (without alignment, NaN
     residuals: never)."""
     return (rival.orientation >= config.trust_orientation and rival.residual <= config.trust_residual
-            and rival.orientation > chosen.orientation and rival.residual < chosen.residual)
+            and _beats(rival, chosen))
+
+
+def _beats(rival: MapCheck, chosen: MapCheck) -> bool:
+    """Whether the map ``rival`` agrees better with its landmarks' orientation than ``chosen``
+    and its alignment follows it more closely (without alignment, NaN residuals: never)."""
+    return rival.orientation > chosen.orientation and rival.residual < chosen.residual
 
 
 def _without_contradicted(shape_1, shape_2, seed, residual: float, check: MapCheck, correspondence,
