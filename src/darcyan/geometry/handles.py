@@ -118,8 +118,15 @@ class HandleLoops:
         cotree = minimum_spanning_tree(sp.coo_matrix((weight, (faces[:, 0], faces[:, 1])),
                                                      shape=(n_faces, n_faces)).tocsr()).tocoo()
         pair = np.minimum(faces[:, 0], faces[:, 1]) * n_faces + np.maximum(faces[:, 0], faces[:, 1])
-        tree_pairs = np.minimum(cotree.row, cotree.col) * n_faces + np.maximum(cotree.row, cotree.col)
-        left = rest[~np.isin(pair, tree_pairs)]
+        # scipy gives int32 indices: in int64 before the product, which passes 2**31 above ~46k faces
+        rows, cols = cotree.row.astype(np.int64), cotree.col.astype(np.int64)
+        tree_pairs = np.minimum(rows, cols) * n_faces + np.maximum(rows, cols)
+        # each pair of faces shares one edge: the cotree's edges found by a sorted search (np.isin
+        # hashes, ten times slower on a large mesh)
+        order = np.argsort(pair, kind="stable")
+        in_cotree = np.zeros(len(rest), bool)
+        in_cotree[order[np.searchsorted(pair, tree_pairs, sorter=order)]] = True
+        left = rest[~in_cotree]
         left = left[np.argsort(loop_length[left], kind="stable")][:count]
         loops = [self._cycle(edge, parent) for edge in left]
         return [loop for loop in loops if loop.vertices.max() < self._n_vertices]  # none across a cap
