@@ -19,6 +19,9 @@ second run into the same ``--out`` reuses the copies and the finished pairs:
   remeshing, gpytoolbox's ``remesh_botsch``, projected back onto the input), about as many
   vertices as the input: another meshing of the same surface, as a scanner's software writes it.
   Each ground-truth sample moves to the nearest vertex of the copy.
+- ``mixed-resolution``: the same isotropic remeshing, each shape to its own vertex count, drawn
+  (seeded) between 0.75 and 4 times the input's on a log scale: source and target differ in
+  resolution and meshing, as in SHREC'19's humans (4.7k to 60k vertices).
 - ``marching-cubes`` and ``glued``: the surface rebuilt as a scan reconstruction would, by
   marching cubes (scikit-image) on the signed distance to the surface (libigl, the sign by the
   winding number), at the level of an offset, then decimated to the input's vertex count
@@ -60,10 +63,14 @@ from darcyan.geometry.mesh import Mesh
 NOISE_LEVELS = (0.001, 0.005, 0.01)  # fractions of the bounding-box diagonal
 DECIMATION = 0.5  # fraction of the faces kept
 DEFAULT_CONDITIONS = ("clean",) + tuple(f"noise={level}" for level in NOISE_LEVELS) + ("decimated",)
-CONDITIONS = DEFAULT_CONDITIONS + ("subdivided", "holes", "inside-out", "isotropic", "marching-cubes", "glued")
+CONDITIONS = DEFAULT_CONDITIONS + ("subdivided", "holes", "inside-out", "isotropic", "mixed-resolution",
+                                   "marching-cubes", "glued")
 REMESH_ITERATIONS = 10  # of remesh_botsch (its default)
+MIXED_RESOLUTION = (0.75, 4.0)  # the mixed-resolution copies' vertex counts, times the input's
 # Marching cubes: (grid step, offset of the level set), both in sqrt(area) units of the input.
 LEVEL_SETS = {"marching-cubes": (0.006, 0.004), "glued": (0.01, 0.012)}
+# Copies benched with --repair (remeshing and decimation can leave duplicate faces).
+REPAIRED = ("decimated", "isotropic", "mixed-resolution") + tuple(LEVEL_SETS)
 HOLES = 3  # faces taken out of each shape of the holes and inside-out copies
 # Written in each copy's "done" file; a copy of another version is made again. 2: the level-set
 # copies by libigl's signed distance and QSlim (2026-12-06).
@@ -93,11 +100,13 @@ def perturbed_dataset(source: Path, target: Path, condition: str, seed: int = 0)
 
             v, f = trimesh.remesh.subdivide(mesh.vertices, mesh.faces)  # keeps the old vertices first
             mesh = Mesh(v, f)
-        elif condition == "isotropic":
+        elif condition in ("isotropic", "mixed-resolution"):
             import gpytoolbox
 
             # equilateral triangles, two per vertex, of the input's area: about as many vertices
-            length = np.sqrt(2 * mesh.area() / (np.sqrt(3) * mesh.n_vertices))
+            # (times a factor drawn per shape for mixed resolutions)
+            factor = 1.0 if condition == "isotropic" else float(np.exp(rng.uniform(*np.log(MIXED_RESOLUTION))))
+            length = np.sqrt(2 * mesh.area() / (np.sqrt(3) * mesh.n_vertices * factor))
             v, f = gpytoolbox.remesh_botsch(mesh.vertices.astype(np.float64), mesh.faces.astype(np.int32),
                                             i=REMESH_ITERATIONS, h=length, project=True)
             mesh = Mesh(v, without_nonmanifold_edges(f))
@@ -219,7 +228,7 @@ def main(argv=None) -> int:
             done.write_text(COPIES_VERSION + "\n")
         # Decimation can leave duplicate faces: drop them as `--repair` would.
         result = run_bench(folder, out / condition, ("darcyan",), args.pairs, config=DarcyanConfig(),
-                           jobs=args.jobs, resume=True, repair=condition in ("decimated", "isotropic") + tuple(LEVEL_SETS),
+                           jobs=args.jobs, resume=True, repair=condition in REPAIRED,
                            plots=False, progress=False, dense=args.dense)
         rows[condition] = row = summary(result.results)
         print(f"{condition:<12} strict {row['rate_per_feature']:.3f}  with flips "
