@@ -390,7 +390,7 @@ def test_an_untrusted_map_is_made_again_on_the_copies_cut_open_and_taken_when_it
         return maps.dense_map(fake_shape("A"), fake_shape("B", vertices), None, config)
 
     untrusted, better = fake_map(0.3, 0.015), fake_map(0.5, 0.012)
-    taken = run(untrusted, better)  # the defaults: cut below 0.05 between meshes of at most 12,000 vertices
+    taken = run(untrusted, better)  # the defaults: cut below 0.05 between meshes of at most 100,000 vertices
     assert made == [("A", "B"), ("cut A", "B")]
     np.testing.assert_array_equal(taken.target, better.target)
     assert taken.check.orientation == 0.5 and taken.check.verdict.handles_cut == 2
@@ -408,8 +408,9 @@ def test_an_untrusted_map_is_made_again_on_the_copies_cut_open_and_taken_when_it
     assert run(untrusted, better, config=DenseConfig(method="pyfm")) is untrusted and len(made) == 1
     assert run(untrusted, better, config=DenseConfig(alignment_rounds=0)) is untrusted and len(made) == 1
     assert run(untrusted, better, config=DenseConfig(handle_length=0)) is untrusted and len(made) == 1  # off
-    assert run(untrusted, better, vertices=12001) is untrusted and len(made) == 1  # a mesh too large to search
-    assert run(untrusted, better, vertices=12001, config=DenseConfig(handle_max_vertices=20000)) is not untrusted
+    assert run(untrusted, better, vertices=100_000) is not untrusted  # at the bound
+    assert run(untrusted, better, vertices=100_001) is untrusted and len(made) == 1  # too large a mesh
+    assert run(untrusted, better, vertices=100_001, config=DenseConfig(handle_max_vertices=200_000)) is not untrusted
 
 
 @pytest.mark.slow

@@ -536,9 +536,9 @@ class DenseConfig:
             (``docs/decisions/every-pair.md``). Costs such a map the search for the loops
             (0.4 s for a glued body's handle at 5,000 vertices) and one more map.
         handle_max_vertices: the cut of ``handle_length`` is made only when both meshes have at
-            most this many vertices (twice ``basis_proxy_vertices``: meshes that are their own
-            coarse copy). The search for the loops grows faster than the mesh: 0.4 s at 5,000
-            vertices, 2.0 s at 20,000, 73 s at 80,000 for one glued body's handle.
+            most this many vertices: beyond, the second map and the search for the loops (5.4 s
+            for a glued body's handle at 80,000 vertices, 1.3 s at 20,000) cost more than a pair
+            in doubt should (a 210k pair's map alone takes about 20 s).
         alignment_slack: a vertex keeps ZoomOut's image where the aligned image's geodesic
             distances to the landmarks differ from the vertex's own by more than this (sqrt(area)
             units) beyond those of ZoomOut's image: two fingers side by side are near in space,
@@ -602,7 +602,7 @@ class DenseConfig:
     rival_sure_matching: bool = True
     landmark_contradiction: float = 0.3
     handle_length: float = 0.05
-    handle_max_vertices: int = 12000
+    handle_max_vertices: int = 100_000
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
