@@ -231,12 +231,12 @@ def main(argv=None) -> int:
                            jobs=args.jobs, resume=True, repair=condition in REPAIRED,
                            plots=False, progress=False, dense=args.dense)
         rows[condition] = row = summary(result.results)
-        print(f"{condition:<12} strict {row['rate_per_feature']:.3f}  with flips "
+        print(f"{condition:<16} strict {row['rate_per_feature']:.3f}  with flips "
               f"{row['rate_sym']:.3f}  repeatability {row['repeatability']:.3f}", flush=True)
         for name, part in row.get("dense", {}).items():
             figures = "no sample mapped" if part["rate"] is None or part["mean_error"] is None else \
                 f"{part['within']} of {part['samples']} within 0.05 ({part['rate']:.4f}), mean error {part['mean_error']:.4f}"
-            print(f"{'':<12} dense {name}: {figures}, {part['untrusted']} not trusted", flush=True)
+            print(f"{'':<16} dense {name}: {figures}, {part['untrusted']} not trusted", flush=True)
         kept.write_text(json.dumps(rows, indent=1))
     return 0
 

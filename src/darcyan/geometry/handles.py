@@ -90,7 +90,7 @@ class HandleLoops:
                                f"once its holes are capped): prepare it first (darcyan.prepare_mesh)")
         a, b = faces.ravel(), faces[:, [1, 2, 0]].ravel()
         order = np.argsort(np.searchsorted(keys, np.minimum(a, b) * total + np.maximum(a, b)), kind="stable")
-        self._edge_faces = np.repeat(np.arange(len(faces)), 3)[order].reshape(-1, 2)
+        self._edge_faces = np.repeat(np.arange(len(faces), dtype=np.int64), 3)[order].reshape(-1, 2)
         self._keys = keys
         self._n_faces = len(faces)
 
