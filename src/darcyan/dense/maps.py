@@ -195,14 +195,12 @@ def _cut_open(shape, config: DenseConfig) -> tuple:
 
     def compute():
         from ..config import Repairing
-        from ..geometry.repair import cut_handles, fill_small_holes
+        from ..geometry.repair import cap_small_holes, cut_handles
 
-        settings = Repairing()
-        mesh, lengths, _ = cut_handles(shape.mesh, config.handle_length, settings.handle_roots)
+        mesh, lengths, _ = cut_handles(shape.mesh, config.handle_length, Repairing().handle_roots)
         if not lengths:
             return None, 0  # not the shape itself: its memo would hold a cycle to it
-        mesh, _, _, _ = fill_small_holes(mesh, settings.hole_length, settings.hole_edges,
-                                         degenerate_area=settings.degenerate_area)
+        mesh, _, _, _ = cap_small_holes(mesh)
         return dataclasses.replace(shape, mesh=mesh, _memo={}), len(lengths)
 
     cut, cuts = shape.derived(("cut open", config.handle_length), compute)

@@ -179,8 +179,7 @@ def prepare_mesh(mesh: Mesh, repair: bool = False, settings: Repairing = Repairi
         changes.append(f"left {handles_left} handle{'s' * (handles_left > 1)} as {'they are' if handles_left > 1 else 'it is'}: "
                        f"no loop found around {'them' if handles_left > 1 else 'it'} that is shorter than "
                        f"{settings.handle_length:g} sqrt(area) and cuts {'them' if handles_left > 1 else 'it'} open")
-    mesh, holes, added, loops = fill_small_holes(mesh, settings.hole_length, settings.hole_edges,
-                                                 degenerate_area=settings.degenerate_area)
+    mesh, holes, added, loops = cap_small_holes(mesh, settings)
     if holes:
         changes.append(f"closed {holes} small hole{'s' * (holes > 1)} (boundary loops of at most "
                        f"{settings.hole_edges} edges, shorter than {settings.hole_length:g} sqrt(area)) "
@@ -578,6 +577,13 @@ def _cut_where_orientations_disagree(mesh: Mesh) -> tuple[Mesh, int]:
             return mesh, dropped
     raise MeshError(mesh.name, "the surface is not orientable (a Moebius strip?): no choice of face "
                                "orientations agrees along every edge, and cutting it open did not help")
+
+
+def cap_small_holes(mesh: Mesh, settings: Repairing = Repairing()) -> tuple[Mesh, int, int, list]:
+    """:func:`fill_small_holes` with ``settings``' hole length, edge count and degenerate area:
+    how :func:`prepare_mesh` caps a mesh's small holes (and a dense map's copy cut open at its
+    handles, the loops its cuts leave)."""
+    return fill_small_holes(mesh, settings.hole_length, settings.hole_edges, degenerate_area=settings.degenerate_area)
 
 
 def fill_small_holes(mesh: Mesh, max_length: float, max_edges: int, loops: list | None = None,
