@@ -365,6 +365,29 @@ def test_the_dense_shape_is_the_shape_cut_open_at_its_short_handles_with_its_num
     assert dense_shape(round_shape, config) is round_shape
 
 
+@pytest.mark.slow
+def test_the_dense_shape_is_cut_and_capped_with_the_repairing_settings_the_shape_was_prepared_with():
+    import dataclasses
+
+    from darcyan.config import DarcyanConfig, Repairing
+    from darcyan.dense.maps import dense_shape
+    from darcyan.geometry.repair import boundary_loop_vertices
+    from darcyan.geometry.shape import prepare_shape
+
+    config = DenseConfig(handle_length=0.08)
+    # Cut once around the tube, the torus opens into a tube with two rims of 8 edges (the
+    # tube's 8 sides), 0.071 sqrt(area) round: too many edges for the default hole (4) ...
+    default = dense_shape(_thin_torus_shape(), config)
+    assert sorted(len(loop) for loop in boundary_loop_vertices(default.mesh)) == [8, 8]
+    # ... capped when the shape was prepared with settings that count them as holes.
+    settings = dataclasses.replace(DarcyanConfig(), repairing=Repairing(hole_edges=8))
+    shape = prepare_shape(synthetic.torus(1.0, 0.005, nu=150, nv=8), settings)
+    assert shape.repairing.hole_edges == 8
+    capped = dense_shape(shape, config)
+    assert capped is not shape and boundary_loop_vertices(capped.mesh) == []
+    assert capped.mesh.n_vertices == default.mesh.n_vertices  # the same cut, capped without new vertices
+
+
 def test_an_untrusted_map_is_made_again_on_the_copies_cut_open_and_taken_when_its_checks_are_better(monkeypatch):
     import types
 

@@ -179,9 +179,10 @@ def dense_shape(shape, config: DenseConfig):
     :func:`~darcyan.geometry.repair.prepare_mesh` caps them). The copy has the same vertices
     first, in the same order, and a copy appended for each vertex of a loop (its
     ``input_index`` the original's), so that the feature points, the input numbering and a map
-    read out on it are those of ``shape``. The loops' search and the capping take the default
-    :class:`~darcyan.config.Repairing` settings (``handle_roots``, ``hole_length``,
-    ``hole_edges``), not a ``--config``'s. Made once per shape
+    read out on it are those of ``shape``. The loops' search and the capping take the
+    :class:`~darcyan.config.Repairing` settings the shape was prepared with
+    (``Shape.repairing``: ``handle_roots``, ``hole_length``, ``hole_edges``, ``degenerate_area``;
+    a ``--config``'s). Made once per shape
     (:meth:`~darcyan.geometry.shape.Shape.derived`). :func:`dense_map` makes its second map on
     it only with ZoomOut and its alignment, between meshes of at most
     ``config.handle_max_vertices`` vertices."""
@@ -194,13 +195,12 @@ def _cut_open(shape, config: DenseConfig) -> tuple:
         return shape, 0
 
     def compute():
-        from ..config import Repairing
         from ..geometry.repair import cap_small_holes, cut_handles
 
-        mesh, lengths, _ = cut_handles(shape.mesh, config.handle_length, Repairing().handle_roots)
+        mesh, lengths, _ = cut_handles(shape.mesh, config.handle_length, shape.repairing.handle_roots)
         if not lengths:
             return None, 0  # not the shape itself: its memo would hold a cycle to it
-        mesh, _, _, _ = cap_small_holes(mesh)
+        mesh, _, _, _ = cap_small_holes(mesh, shape.repairing)
         return dataclasses.replace(shape, mesh=mesh, _memo={}), len(lengths)
 
     cut, cuts = shape.derived(("cut open", config.handle_length), compute)

@@ -16,7 +16,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..config import DarcyanConfig
+from ..config import DarcyanConfig, Repairing
 from ..errors import MeshError
 from .curvature import Curvatures, principal_curvatures
 from .denoise import denoise_mesh
@@ -47,6 +47,9 @@ class Shape:
         denoise_steps: Taubin smoothing steps applied (0: the surface was left as it was).
         coincident: an input vertex that is not on the prepared mesh but within this distance
             (prepared units) of one of its vertices is that vertex: a copy that repair welded.
+        repairing: the :class:`~darcyan.config.Repairing` settings it was prepared with, which
+            what is made from it later keeps (a dense map's copy cut open at its handles:
+            :func:`~darcyan.dense.maps.dense_shape`).
     """
 
     mesh: Mesh
@@ -56,6 +59,7 @@ class Shape:
     changes: tuple = ()
     denoise_steps: int = 0
     coincident: float = 0.0
+    repairing: Repairing = Repairing()
     _memo: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -248,4 +252,5 @@ def prepare_shape(mesh: Mesh, config: DarcyanConfig = DarcyanConfig(), repair: b
         edges = normalized.edges()
         mean_edge = float(np.linalg.norm(np.diff(normalized.vertices[edges], axis=1), axis=2).mean())
         coincident = config.repairing.weld_tolerance * mean_edge
-    return Shape(normalized, mesh.n_vertices, positions, normalization, tuple(changes), steps, coincident=coincident)
+    return Shape(normalized, mesh.n_vertices, positions, normalization, tuple(changes), steps, coincident=coincident,
+                 repairing=config.repairing)
