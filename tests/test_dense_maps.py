@@ -386,6 +386,10 @@ def test_the_dense_shape_is_cut_and_capped_with_the_repairing_settings_the_shape
     capped = dense_shape(shape, config)
     assert capped is not shape and boundary_loop_vertices(capped.mesh) == []
     assert capped.mesh.n_vertices == default.mesh.n_vertices  # the same cut, capped without new vertices
+    # The loops are sought from the shape's own number of roots: none, no loop and no cut.
+    rootless = dataclasses.replace(DarcyanConfig(), repairing=Repairing(handle_roots=0))
+    no_roots = prepare_shape(synthetic.torus(1.0, 0.005, nu=150, nv=8), rootless)
+    assert dense_shape(no_roots, config) is no_roots
 
 
 def test_an_untrusted_map_is_made_again_on_the_copies_cut_open_and_taken_when_its_checks_are_better(monkeypatch):

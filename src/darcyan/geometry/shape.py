@@ -47,9 +47,9 @@ class Shape:
         denoise_steps: Taubin smoothing steps applied (0: the surface was left as it was).
         coincident: an input vertex that is not on the prepared mesh but within this distance
             (prepared units) of one of its vertices is that vertex: a copy that repair welded.
-        repairing: the :class:`~darcyan.config.Repairing` settings it was prepared with, which
-            what is made from it later keeps (a dense map's copy cut open at its handles:
-            :func:`~darcyan.dense.maps.dense_shape`).
+        repairing: the :class:`~darcyan.config.Repairing` settings it was prepared with (with
+            or without repair); what is later derived from it uses them too (a dense map's copy
+            cut open at its handles: :func:`~darcyan.dense.maps.dense_shape`).
     """
 
     mesh: Mesh
