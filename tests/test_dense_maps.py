@@ -331,12 +331,16 @@ def test_a_map_not_trusted_says_which_conditions_it_fails(capsys):
     assert "dense map not trusted (its orientation agrees with its landmarks by 0.10" in err and "; the alignment" in err
 
 
-def _thin_torus_shape():
+def _thin_torus_shape(repairing=None):
     """A prepared torus with one short handle: its tube 2 pi 0.005 round, 0.071 sqrt(area) (the
-    torus's area 4 pi^2 0.005)."""
+    torus's area 4 pi^2 0.005); prepared with the ``repairing`` settings (default: the defaults)."""
+    import dataclasses
+
+    from darcyan.config import DarcyanConfig
     from darcyan.geometry.shape import prepare_shape
 
-    return prepare_shape(synthetic.torus(1.0, 0.005, nu=150, nv=8))
+    config = DarcyanConfig() if repairing is None else dataclasses.replace(DarcyanConfig(), repairing=repairing)
+    return prepare_shape(synthetic.torus(1.0, 0.005, nu=150, nv=8), config)
 
 
 @pytest.mark.slow
@@ -367,12 +371,9 @@ def test_the_dense_shape_is_the_shape_cut_open_at_its_short_handles_with_its_num
 
 @pytest.mark.slow
 def test_the_dense_shape_is_cut_and_capped_with_the_repairing_settings_the_shape_was_prepared_with():
-    import dataclasses
-
-    from darcyan.config import DarcyanConfig, Repairing
+    from darcyan.config import Repairing
     from darcyan.dense.maps import dense_shape
     from darcyan.geometry.repair import boundary_loop_vertices
-    from darcyan.geometry.shape import prepare_shape
 
     config = DenseConfig(handle_length=0.08)
     # Cut once around the tube, the torus opens into a tube with two rims of 8 edges (the
@@ -380,15 +381,13 @@ def test_the_dense_shape_is_cut_and_capped_with_the_repairing_settings_the_shape
     default = dense_shape(_thin_torus_shape(), config)
     assert sorted(len(loop) for loop in boundary_loop_vertices(default.mesh)) == [8, 8]
     # ... capped when the shape was prepared with settings that count them as holes.
-    settings = dataclasses.replace(DarcyanConfig(), repairing=Repairing(hole_edges=8))
-    shape = prepare_shape(synthetic.torus(1.0, 0.005, nu=150, nv=8), settings)
+    shape = _thin_torus_shape(Repairing(hole_edges=8))
     assert shape.repairing.hole_edges == 8
     capped = dense_shape(shape, config)
     assert capped is not shape and boundary_loop_vertices(capped.mesh) == []
     assert capped.mesh.n_vertices == default.mesh.n_vertices  # the same cut, capped without new vertices
     # The loops are sought from the shape's own number of roots: none, no loop and no cut.
-    rootless = dataclasses.replace(DarcyanConfig(), repairing=Repairing(handle_roots=0))
-    no_roots = prepare_shape(synthetic.torus(1.0, 0.005, nu=150, nv=8), rootless)
+    no_roots = _thin_torus_shape(Repairing(handle_roots=0))
     assert dense_shape(no_roots, config) is no_roots
 
 
