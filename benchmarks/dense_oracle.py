@@ -11,6 +11,9 @@ For each of N pairs drawn (seed 0) from PAIRS (``source<TAB>target[<TAB>group]``
 * ``last steps from truth``: only ZoomOut's last iterations (sizes ``basis_size - 10`` to
   ``basis_size``, one by one), started from the true correspondence: what the iterations at
   the final size do to a right map;
+* ``last steps from truth, NAME`` (with ``--last-steps '{"NAME": {fields}}'``): the same
+  last iterations with those fields of :class:`~darcyan.dense.config.DenseConfig` changed
+  (which term of ZoomOut holds a right map away from the truth);
 * ``best at k``: no iteration at all: the functional maps of size k (from k + ``basis_margin``
   eigenfunctions of the other shape, like the dense map's own) fitted by plain least squares
   (without the commutativity shrinkage of the dense map's fits) to the true correspondence of
@@ -97,7 +100,7 @@ def distortions(shape_1, shape_2, source: np.ndarray, target: np.ndarray, maps: 
 
 
 def score_pair(task: tuple) -> dict:
-    dataset, source_name, target_name, group, sizes, distortion = task
+    dataset, source_name, target_name, group, sizes, distortion, last_variants = task
     warnings.simplefilter("ignore")
     (shape_1, shape_2), correspondence, truth = prepared_pair(dataset, source_name, target_name)
     config = DenseConfig()
@@ -138,6 +141,16 @@ def score_pair(task: tuple) -> dict:
         c_12, c_21 = zoomout(basis_1[s_1], basis_2[s_2], first_12, first_21, schedule, coords_1[s_1], coords_2[s_2],
                              *extra, *values)
         maps[name] = read_out(c_12, c_21, basis_1, basis_2)
+    for name, changes in last_variants.items():  # the last steps with some terms changed
+        changed = dataclasses.replace(last_steps, **changes)
+        weight = signature_turn_weight(k_landmarks, correspondence.feature_counts, changed)
+        turned = signature_turn_coordinates(shape_1, shape_2, changed, coords_1[:, :k_landmarks],
+                                            coords_2[:, :k_landmarks], weight)
+        terms = [None if c is None else c[s] for pair in (coarse, turned) for c, s in zip(pair, samples)]
+        c_12, c_21 = zoomout(basis_1[s_1], basis_2[s_2], first_12, first_21, changed, coords_1[s_1], coords_2[s_2],
+                             *terms, *values)
+        local = read_out_map(shape_2, basis_1, basis_2, c_12, c_21, changed, coords_1, coords_2, s_2, *turned)
+        maps[f"last steps from truth, {name}"] = input_map(shape_1, shape_2, local)
 
     for size in sizes:
         sized = dataclasses.replace(config, basis_size=size)
@@ -162,9 +175,12 @@ def main(argv=None) -> int:
     parser.add_argument("--sizes", type=int, nargs="+", default=[100], help="basis sizes of the 'best at k' maps")
     parser.add_argument("--distortion", type=int, default=0, metavar="N",
                         help="also each map's geodesic distortion, and the ground truth's, on N listed vertices")
+    parser.add_argument("--last-steps", default="{}", metavar="JSON",
+                        help='also the last steps from the truth with DenseConfig fields changed: {"name": {fields}}')
     parser.add_argument("--out", type=Path)
     args = parser.parse_args(argv)
     try:
+        last_variants = _last_step_variants(args.last_steps)
         if any(size < 1 for size in args.sizes):
             raise DarcyanError(f"--sizes must be positive, got {args.sizes}")
         if args.distortion < 0 or args.distortion == 1:
@@ -181,7 +197,8 @@ def main(argv=None) -> int:
                 if not (DATA / args.dataset / "corres" / f"{name}.vts").is_file():
                     raise DarcyanError(f"{DATA / args.dataset / 'corres' / (name + '.vts')}: no such ground truth "
                                        f"(this diagnostic needs the dataset's .vts files)")
-        tasks = [(args.dataset, source, target, group, args.sizes, args.distortion) for source, target, group in pairs]
+        tasks = [(args.dataset, source, target, group, args.sizes, args.distortion, last_variants)
+                 for source, target, group in pairs]
         results = list(process_map(score_pair, tasks, 2, ordered=True))
     except (OSError, DarcyanError) as exc:  # one line, no traceback (OSError names its file)
         print(f"dense_oracle.py: error: {exc}", file=sys.stderr)
@@ -206,6 +223,23 @@ def main(argv=None) -> int:
     if args.distortion:
         print_distortions(results)
     return 0
+
+
+def _last_step_variants(text: str) -> dict:
+    """``{name: fields}`` of ``--last-steps``, each a valid change of :class:`DenseConfig`.
+    Raises DarcyanError naming the problem."""
+    try:
+        variants = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise DarcyanError(f"--last-steps: not JSON: {exc}") from None
+    if not isinstance(variants, dict) or not all(isinstance(v, dict) for v in variants.values()):
+        raise DarcyanError('--last-steps: expected {"name": {field: value, ...}, ...}')
+    for name, changes in variants.items():
+        try:
+            DenseConfig(**changes)
+        except TypeError as exc:
+            raise DarcyanError(f"--last-steps {name}: {exc}") from None
+    return variants
 
 
 def print_distortions(results: list) -> None:
