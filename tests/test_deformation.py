@@ -145,3 +145,28 @@ def test_a_vertex_no_sample_reaches_follows_its_neighbours_wherever_the_targets_
     # where the targets lie does not matter (the default start included)
     far = np.array([50.0, 20.0, -40.0])
     assert np.allclose(arap.fit(moved[1:] + far, 6), arap.fit(moved[1:], 6) + far, atol=1e-9)
+
+
+@pytest.mark.parametrize("scale", [1.1, 0.9])
+def test_a_stretch_lets_the_one_rings_follow_a_scaled_copy_within_its_range(cylinder, scale):
+    # A similarity (turned and scaled by 1.1, or 0.9) is an exact fit when one-rings may scale
+    # by 20% either way: every one-ring's best scale is the copy's. Kept rigid, or held within 5%,
+    # the one-rings cannot reach it, and the fit stays short of the targets.
+    shape, _ = cylinder
+    rest = shape.mesh.vertices
+    moved = scale * rest @ random_rotation(5).T + [0.3, 0.0, -1.0]
+
+    def gap(stretch):
+        arap = ArapDeformation(rest, shape.laplacian, shape.vertex_areas, 0.035, stretch=stretch)
+        return np.abs(arap.fit(moved, 6) - moved).max()
+
+    assert gap(0.2) < 1e-9
+    assert gap(0.0) > 1e-3 and gap(0.05) > 1e-3
+    assert gap(0.05) < gap(0.0)
+
+
+def test_a_bad_stretch_is_refused(cylinder):
+    shape, _ = cylinder
+    for bad in (-0.1, float("nan")):
+        with pytest.raises(ValueError, match="stretch"):
+            ArapDeformation(shape.mesh.vertices, shape.laplacian, shape.vertex_areas, 0.035, stretch=bad)

@@ -72,6 +72,21 @@ def test_bad_alignment_settings_name_the_field(changes, field):
         DenseConfig(**changes)
 
 
+def test_the_alignment_deforms_with_the_stretch_it_is_given(poses):
+    # The stretch reaches the deformation, on the mesh itself and through a coarse copy (its
+    # effect: tests/test_deformation.py), and a deformation made for one stretch is not reused
+    # for another.
+    from darcyan.dense.alignment import _deformation
+
+    shape_1 = poses[0]
+    for proxy_vertices in (0, 1000):
+        rigid, _ = _deformation(shape_1, 0.035, proxy_vertices)
+        stretching, _ = _deformation(shape_1, 0.035, proxy_vertices, 0.2)
+        assert rigid._stretch == 0.0 and stretching._stretch == 0.2
+        assert _deformation(shape_1, 0.035, proxy_vertices, 0.2)[0] is stretching
+        assert (rigid._sampling is None) == (stretching._sampling is None) == (proxy_vertices == 0)
+
+
 def test_an_image_far_from_its_landmark_distances_is_not_taken(poses):
     shape_1, shape_2, truth = poses
     noisy = noisy_map(shape_2, truth, 0.5, seed=2)

@@ -53,3 +53,10 @@ def test_rival_agreement_is_a_share_and_its_radius_non_negative():
     with pytest.raises(ConfigError, match="rival_agreement_radius must be non-negative"):
         DenseConfig(rival_agreement_radius=-0.01)
     assert DenseConfig(rival_agreement=0.0, rival_agreement_radius=0.0).rival_agreement == 0.0
+
+
+def test_dense_config_rejects_a_bad_alignment_stretch():
+    for bad in (-0.1, float("inf"), True, "0.2"):
+        with pytest.raises(ConfigError, match="dense: alignment_stretch must be non-negative"):
+            DenseConfig(alignment_stretch=bad)
+    assert DenseConfig(alignment_stretch=0.15).alignment_stretch == 0.15

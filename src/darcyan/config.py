@@ -472,6 +472,10 @@ class DenseConfig:
             through its coarse copy of about this many (the one ``basis_proxy_vertices`` makes
             when they are equal), its vertices moving with the copy; 0: always the mesh itself
             (``docs/decisions/speed.md``).
+        alignment_stretch: how much each one-ring of the deformed source may grow or shrink beside
+            turning (its best scale, held within ``1 / (1 + stretch)`` and ``1 + stretch``): 0 keeps
+            one-rings their size (as rigid as possible); above it the source may follow a target
+            whose proportions differ (as similar as possible, within that range).
         start_dimensions: when the matches give fewer than three consistent landmarks, the map
             starts from each choice of signs of this many first (non-constant) Laplace-Beltrami
             eigenfunctions, 2^d short maps (:mod:`darcyan.dense.start`).
@@ -591,6 +595,7 @@ class DenseConfig:
     alignment_normal_weight: float = 0.02
     alignment_iterations: int = 6
     alignment_proxy_vertices: int = 6000
+    alignment_stretch: float = 0.0
     alignment_slack: float = 0.04
     start_dimensions: int = 4
     start_landmarks: int = 6
@@ -650,7 +655,7 @@ class DenseConfig:
                      "orientation_weight", "basis_tolerance", "signature_weight", "signature_turns", "signature_turns_partial",
                      "commutativity", "alignment_normal_weight", "alignment_slack", "landmark_tie_weight",
                      "trust_residual", "landmark_contradiction", "basis_lanczos", "rival_agreement_radius",
-                     "handle_length"):
+                     "handle_length", "alignment_stretch"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0
                     and math.isfinite(value)):

@@ -5,7 +5,8 @@ The energy of positions ``y (n, 3)`` of a mesh at rest in ``x (n, 3)``, with tar
     sum_ij w_ij |(y_i - y_j) - R_i (x_i - x_j)|^2  +  (2 / length^2) sum_i a_i |y_i - t_i|^2
 
 (the first sum over ordered pairs of neighbours, so each edge twice; ``w`` the cotangent
-weights, clamped at 0; ``R_i`` the best rotation of vertex i's one-ring;
+weights, clamped at 0; ``R_i`` the best rotation of vertex i's one-ring, or with a ``stretch``
+its best rotation times its best scale, held within ``1 / (1 + stretch)`` and ``1 + stretch``;
 ``a`` the vertex areas over the total area). The targets may also be given at points other than
 the vertices (``sampling``): the pull is then ``(2 / length^2) sum_s a_s |(P y)_s - t_s|^2`` over
 points ``P y``, each a barycentric combination of vertices, with areas ``a_s`` of their own. A
@@ -43,9 +44,12 @@ class ArapDeformation:
         sampling: ``(m, n)`` scipy sparse, each row the barycentric weights (summing to 1) of a
             point of the surface where a target is given; ``None``: the targets are at the
             vertices. With it, ``areas`` are the ``(m,)`` areas of those points.
+        stretch: how much each one-ring may grow or shrink beside turning (0: as rigid as
+            possible; above it, as similar as possible within that range).
     """
 
-    def __init__(self, vertices: np.ndarray, laplacian, areas: np.ndarray, length: float, sampling=None):
+    def __init__(self, vertices: np.ndarray, laplacian, areas: np.ndarray, length: float, sampling=None,
+                 stretch: float = 0.0):
         import scipy.sparse as sp  # lazily: a cached match imports no scipy
         from scipy.sparse.linalg import splu
 
@@ -64,6 +68,12 @@ class ArapDeformation:
         # each directed edge (i, j), times its weight: x_i - x_j
         self._edges = weights[:, None] * (self._vertices[self._rows] - self._vertices[cols])
         self._cols = cols
+        if not (np.isfinite(stretch) and stretch >= 0):
+            raise ValueError(f"ARAP: stretch must be a number >= 0, got {stretch!r}")
+        self._stretch = float(stretch)
+        if self._stretch > 0:  # sum_j w_ij |x_i - x_j|^2: the rest one-ring's size, against which a scale is read
+            self._rest_size = np.bincount(self._rows, np.einsum("ij,ij->i", self._edges, self._vertices[self._rows]
+                                                                 - self._vertices[cols]), minlength=n)
         degree = np.asarray(self._weights.sum(axis=1)).ravel()
         # sum_j w_ij (x_i - x_j): the rest one-ring, rotated in each step
         self._spokes = degree[:, None] * self._vertices - self._weights @ self._vertices
@@ -112,8 +122,20 @@ class ArapDeformation:
             pulled = pulled + self._floor[:, None] * mean
         for _ in range(iterations):
             rotations = self._rotations(positions)
+            if self._stretch > 0:
+                rotations = rotations * self._scales(positions, rotations)[:, None, None]
             positions = self._solve(self._rotated_edges(rotations) + pulled)
         return positions
+
+    def _scales(self, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
+        """``(n,)`` each one-ring's best scale beside its rotation ``R_i``: ``trace(R_i^T M_i) /
+        sum_j w_ij |x_i - x_j|^2`` with ``M_i = sum_j w_ij (y_i - y_j) (x_i - x_j)^T``, held
+        within ``1 / (1 + stretch)`` and ``1 + stretch`` (1 where a one-ring has no size)."""
+        current = positions[self._rows] - positions[self._cols]
+        turned = np.einsum("eab,eb->ea", rotations[self._rows], self._edges)  # w_ij R_i (x_i - x_j)
+        along = np.bincount(self._rows, np.einsum("ij,ij->i", turned, current), minlength=len(positions))
+        scale = np.divide(along, self._rest_size, out=np.ones_like(along), where=self._rest_size > 0)
+        return np.clip(scale, 1.0 / (1.0 + self._stretch), 1.0 + self._stretch)
 
     def rotations(self, positions: np.ndarray) -> np.ndarray:
         """``(n, 3, 3)`` each one-ring's rotation best taking its rest edges to those of
