@@ -44,7 +44,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from dense_variants import DATA, add_sample_arguments, prepared_pair, read_pair_lines  # the sibling script
+from dense_variants import DATA, add_sample_arguments, prepared_pair, read_pair_lines, read_variants  # the sibling script
 
 from darcyan.dense.config import DenseConfig
 from darcyan.dense.landmarks import landmark_coordinates
@@ -180,7 +180,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path)
     args = parser.parse_args(argv)
     try:
-        last_variants = _last_step_variants(args.last_steps)
+        last_variants = read_variants(args.last_steps, "--last-steps")
         if any(size < 1 for size in args.sizes):
             raise DarcyanError(f"--sizes must be positive, got {args.sizes}")
         if args.distortion < 0 or args.distortion == 1:
@@ -223,23 +223,6 @@ def main(argv=None) -> int:
     if args.distortion:
         print_distortions(results)
     return 0
-
-
-def _last_step_variants(text: str) -> dict:
-    """``{name: fields}`` of ``--last-steps``, each a valid change of :class:`DenseConfig`.
-    Raises DarcyanError naming the problem."""
-    try:
-        variants = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise DarcyanError(f"--last-steps: not JSON: {exc}") from None
-    if not isinstance(variants, dict) or not all(isinstance(v, dict) for v in variants.values()):
-        raise DarcyanError('--last-steps: expected {"name": {field: value, ...}, ...}')
-    for name, changes in variants.items():
-        try:
-            DenseConfig(**changes)
-        except TypeError as exc:
-            raise DarcyanError(f"--last-steps {name}: {exc}") from None
-    return variants
 
 
 def print_distortions(results: list) -> None:

@@ -93,14 +93,15 @@ def score_pair(task: tuple) -> dict:
                       "seconds": seconds[name], "check": checks[name]} for name in variants}}
 
 
-def read_variants(text: str) -> dict:
-    """name -> DenseConfig changes, each checked by building its DenseConfig."""
+def read_variants(text: str, what: str = "variants") -> dict:
+    """name -> DenseConfig changes, each checked by building its DenseConfig (``what``: the
+    argument's name in the messages)."""
     try:
         variants = json.loads(text)
     except ValueError as exc:
-        raise DarcyanError(f"variants: not JSON ({exc})") from None
+        raise DarcyanError(f"{what}: not JSON ({exc})") from None
     if not isinstance(variants, dict) or not all(isinstance(v, dict) for v in variants.values()):
-        raise DarcyanError('variants: a JSON object of name -> {field: value}, e.g. {"default": {}}')
+        raise DarcyanError(f'{what}: a JSON object of name -> {{field: value}}, e.g. {{"default": {{}}}}')
     for name, changes in variants.items():
         try:
             DenseConfig(**changes)

@@ -121,19 +121,18 @@ class ArapDeformation:
             positions = mean if start is None else np.asarray(start, dtype=np.float64)
             pulled = pulled + self._floor[:, None] * mean
         for _ in range(iterations):
-            rotations = self._rotations(positions)
+            covariances = self._covariances(positions)
+            rotations = self._rotations_of(covariances)
             if self._stretch > 0:
-                rotations = rotations * self._scales(positions, rotations)[:, None, None]
+                rotations = rotations * self._scales(covariances, rotations)[:, None, None]
             positions = self._solve(self._rotated_edges(rotations) + pulled)
         return positions
 
-    def _scales(self, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
-        """``(n,)`` each one-ring's best scale beside its rotation ``R_i``: ``trace(R_i^T M_i) /
-        sum_j w_ij |x_i - x_j|^2`` with ``M_i = sum_j w_ij (y_i - y_j) (x_i - x_j)^T``, held
-        within ``1 / (1 + stretch)`` and ``1 + stretch`` (1 where a one-ring has no size)."""
-        current = positions[self._rows] - positions[self._cols]
-        turned = np.einsum("eab,eb->ea", rotations[self._rows], self._edges)  # w_ij R_i (x_i - x_j)
-        along = np.bincount(self._rows, np.einsum("ij,ij->i", turned, current), minlength=len(positions))
+    def _scales(self, covariances: np.ndarray, rotations: np.ndarray) -> np.ndarray:
+        """``(n,)`` each one-ring's best scale beside its rotation ``R_i``: ``trace(R_i S_i^T) /
+        sum_j w_ij |x_i - x_j|^2`` for its covariance ``S_i`` (:meth:`_covariances`), held within
+        ``1 / (1 + stretch)`` and ``1 + stretch`` (1 where a one-ring has no size)."""
+        along = np.einsum("nab,bna->n", rotations, covariances)
         scale = np.divide(along, self._rest_size, out=np.ones_like(along), where=self._rest_size > 0)
         return np.clip(scale, 1.0 / (1.0 + self._stretch), 1.0 + self._stretch)
 
@@ -143,21 +142,31 @@ class ArapDeformation:
         return self._rotations(np.asarray(positions, dtype=np.float64))
 
     def _rotations(self, positions: np.ndarray) -> np.ndarray:
-        """``(n, 3, 3)`` each one-ring's rotation best taking its rest edges to its current ones:
-        ``R = V U^T`` for the covariance ``S = sum_j w_ij (x_i - x_j) (y_i - y_j)^T = U D V^T``
-        (a proper rotation: the sign of V's last column turned where that would be a reflection),
-        by libigl's ``fit_rotations`` (a fixed-size 3x3 SVD; 2.5x numpy's batched SVD)."""
-        import igl
+        """``(n, 3, 3)`` the local step's rotations for ``positions (n, 3)`` (float64)."""
+        return self._rotations_of(self._covariances(positions))
 
+    def _covariances(self, positions: np.ndarray) -> np.ndarray:
+        """``(3, n, 3)`` each one-ring's covariance ``S_i = sum_j w_ij (x_i - x_j) (y_i - y_j)^T``
+        stacked as libigl reads them: ``[a, i, b]`` is entry ``(a, b)`` of ``S_i``."""
         n = len(positions)
         current = positions[self._rows] - positions[self._cols]
-        # stacked as libigl reads them: row a * n + i is the a-th row of vertex i's matrix
         stacked = np.empty((3, n, 3))
         for a in range(3):
             for b in range(3):
                 stacked[a, :, b] = np.bincount(self._rows, self._edges[:, a] * current[:, b], minlength=n)
+        return stacked
+
+    @staticmethod
+    def _rotations_of(covariances: np.ndarray) -> np.ndarray:
+        """``(n, 3, 3)`` each one-ring's rotation best taking its rest edges to its current ones:
+        ``R = V U^T`` for its covariance ``S = U D V^T`` (:meth:`_covariances`; a proper rotation:
+        the sign of V's last column turned where that would be a reflection), by libigl's
+        ``fit_rotations`` (a fixed-size 3x3 SVD; 2.5x numpy's batched SVD)."""
+        import igl
+
+        n = covariances.shape[1]
         # libigl gives the rotation nearest S (3 x 3n, one per column block); R is its transpose
-        return igl.fit_rotations(stacked.reshape(3 * n, 3), False).reshape(3, n, 3).transpose(1, 0, 2)
+        return igl.fit_rotations(covariances.reshape(3 * n, 3), False).reshape(3, n, 3).transpose(1, 0, 2)
 
     def _rotated_edges(self, rotations: np.ndarray) -> np.ndarray:
         """``(n, 3)``: ``sum_j w_ij (R_i + R_j) (x_i - x_j) / 2``, the global step's right side."""
