@@ -414,13 +414,14 @@ def _installed(module: str) -> bool:
 @pytest.mark.slow
 def test_bench_verifies_the_matchings_in_doubt(capsys, tmp_path, figures, monkeypatch, private_cache):
     """Every darcyan record carries the orientation test's margin; with every matching in doubt
-    (verify_below 100) each is verified, as `darcyan match` would, and says so; with 0, none."""
+    (verify_below 100) each is verified, as `darcyan match` would, and says so; likewise with
+    none in doubt but every margin below verify_sparse_below; with both 0, none."""
     pairs = tmp_path / "pairs.txt"
     pairs.write_text("figure0\tfigure1\nfigure2\tfigure0\n")
-    for below, verified in ((100.0, True), (0.0, False)):
-        settings = tmp_path / f"verify{below:g}.json"
-        settings.write_text(json.dumps({"mirror": {"verify_below": below}}))
-        out = tmp_path / f"out{below:g}"
+    for below, sparse_below, verified in ((100.0, 100.0, True), (0.0, 100.0, True), (0.0, 0.0, False)):
+        settings = tmp_path / f"verify{below:g}-{sparse_below:g}.json"
+        settings.write_text(json.dumps({"mirror": {"verify_below": below, "verify_sparse_below": sparse_below}}))
+        out = tmp_path / f"out{below:g}-{sparse_below:g}"
         code, _, err = run(capsys, "bench", figures, "--pairs", pairs, "--config", settings, "--out", out, "-q")
         assert code == 0, err
         records = [json.loads(line) for line in (out / "pairs.jsonl").read_text().splitlines()]
@@ -442,7 +443,7 @@ def test_bench_verifies_the_matchings_in_doubt(capsys, tmp_path, figures, monkey
 
     for module in (darcyan.dense.seeds, darcyan.dense.verify):
         monkeypatch.setattr(module, "verified_matches", recompute)
-    settings = tmp_path / "verify100.json"
+    settings = tmp_path / "verify100-100.json"
     code, _, err = run(capsys, "bench", figures, "--pairs", pairs, "--config", settings, "--out", tmp_path / "again", "-q")
     assert code == 0, err
     records = [json.loads(line) for line in (tmp_path / "again" / "pairs.jsonl").read_text().splitlines()]

@@ -116,7 +116,8 @@ def test_the_config_survives_json_and_the_paper_preset_differs():
 
 
 @pytest.mark.parametrize("section, field, value", [
-    ("mirror", "samples", 0), ("mirror", "min_sine", 1.5), ("heat", "tolerance", -1.0),
+    ("mirror", "samples", 0), ("mirror", "min_sine", 1.5), ("mirror", "verify_sparse_below", -0.5),
+    ("heat", "tolerance", -1.0),
     ("denoising", "taubin_mu", 0.2), ("margins", "trace", 0.5), ("consistency", "beam_width", 0)])
 def test_a_section_value_out_of_range_names_it(section, field, value):
     kind = SECTIONS[section]

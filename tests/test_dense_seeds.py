@@ -87,6 +87,32 @@ def test_cli_verify_writes_the_verified_matches(small_pose_files, tmp_path, caps
 
 
 @pytest.mark.slow
+def test_a_matching_won_by_a_small_margin_is_verified_without_a_dense_map(faust, tmp_path, monkeypatch, capsys):
+    """tr_reg_032 -> tr_reg_033 (one person): the orientation test prefers a matching with two
+    extremities swapped (3 of 5 right by the vts ground truth) by a margin of about 0.67, above
+    verify_below (not in doubt) but below verify_sparse_below: `darcyan match` verifies it and
+    the short dense maps choose the right one (5 of 5); with --dense it is not verified (the dense
+    map weighs the alternatives itself)."""
+    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
+    source, target = faust / "tr_reg_032.off", faust / "tr_reg_033.off"
+    truth = f"{faust / 'corres' / 'tr_reg_032.vts'},{faust / 'corres' / 'tr_reg_033.vts'}"
+    config = DarcyanConfig()
+    first, second = (analyze_mesh(load_mesh(p), config) for p in (source, target))
+    correspondence = match_shapes(first, second, config)
+    assert config.mirror.verify_below <= correspondence.margin < config.mirror.verify_sparse_below
+    assert correspondence.to_verify and not correspondence.in_doubt
+    sooner = config.replace(mirror=dataclasses.replace(config.mirror, verify_sparse_below=0.25))
+    assert not match_shapes(first, second, sooner).to_verify
+    for flag, correct in (([], "5 of 5"), (["--no-verify"], "3 of 5")):
+        assert main(["match", str(source), str(target), "--truth", truth, "-o", str(tmp_path / "m.csv"), *flag]) == 0
+        err = capsys.readouterr().err
+        assert f"{correct} matches correct" in err
+        assert (f"verified (the orientation test's margin {correspondence.margin:.2f} < 0.75)" in err) == (not flag)
+    assert main(["match", str(source), str(target), "--dense", "-o", str(tmp_path / "map.csv")]) == 0
+    assert "verifying the matches" not in capsys.readouterr().err
+
+
+@pytest.mark.slow
 def test_a_matching_in_doubt_is_verified_by_default(faust, tmp_path, monkeypatch, capsys):
     """tr_reg_016 -> tr_reg_049 (two people): the orientation test prefers a mirrored matching
     by a margin of 0.05 (1 of 5 matches right by the vts ground truth); in doubt, the short dense

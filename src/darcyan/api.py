@@ -155,11 +155,14 @@ def dense_text(source: str, target: str, map_12, form: str) -> str:
 
 def verification_wanted(correspondence, verify, dense: bool) -> bool:
     """Whether a matching is verified: always with ``verify=True``, never with ``False``; with
-    ``"auto"``, when the sparse stage is in doubt of it and no dense map follows (a dense map
-    weighs the same alternatives on its full basis)."""
+    ``"auto"``, when no dense map follows (a dense map weighs the same alternatives on its full
+    basis) and the orientation test's margin is below ``mirror.verify_sparse_below`` or the
+    matching is in doubt (``Correspondence.to_verify``; a correspondence made elsewhere without
+    it: ``in_doubt``)."""
     if verify not in VERIFY_CHOICES:
         raise DarcyanError(f"verify must be 'auto', True or False, got {verify!r}")
-    return verify is True or (verify == "auto" and bool(correspondence.in_doubt) and not dense)
+    wanted = getattr(correspondence, "to_verify", False) or bool(correspondence.in_doubt)
+    return verify is True or (verify == "auto" and wanted and not dense)
 
 
 @owns_threads
@@ -227,8 +230,10 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
         matches = match_shapes(descriptions[0], description, config)
         verification = None
         if verification_wanted(matches, verify, dense):
-            why = "" if verify is True else (f" (in doubt: the orientation test's margin {matches.margin:.2f} "
-                                             f"< {config.mirror.verify_below:g})")
+            why = "" if verify is True else (
+                f" (in doubt: the orientation test's margin {matches.margin:.2f} < {config.mirror.verify_below:g})"
+                if matches.in_doubt else
+                f" (the orientation test's margin {matches.margin:.2f} < {config.mirror.verify_sparse_below:g})")
             say(f"verifying the matches{why}")
             try:
                 matches, verification = _verified(inputs[0], inputs[index], matches, lambda i=index: (shape_of(0),

@@ -468,8 +468,8 @@ def build_parser() -> argparse.ArgumentParser:
     verify.add_argument("--verify", action="store_true", help="weigh the feature matches against the other matchings "
                         "the orientation test considered by short dense maps (which keeps the shapes' curvature "
                         "better?) and write the winner: fixes mirrored matches of people (about 1.5 s more for "
-                        "5k-vertex shapes). Done by default when the test is in doubt (its margin below "
-                        "mirror.verify_below)")
+                        "5k-vertex shapes). Done by default, without --dense, when the test's margin is below "
+                        "mirror.verify_sparse_below (0.75) or it is in doubt (below mirror.verify_below)")
     verify.add_argument("--no-verify", action="store_true", help="never verify: the matches of the descriptors and the "
                         "orientation test alone")
     p.add_argument("--jobs", type=int, default=2, help="processes describing the two shapes at once when neither "

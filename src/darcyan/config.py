@@ -229,7 +229,17 @@ class MirrorTest:
             (``Correspondence.in_doubt``): where the shapes themselves are at hand (``darcyan
             match``, ``darcyan bench``, :func:`darcyan.dense.verified_matches`), short dense maps
             seeded by it and by the other candidates decide, as ``--verify`` does for every
-            pair. 0: never in doubt.
+            pair. A dense map reads the doubt too: it then weighs its own start without
+            landmarks, and trusts the map only when its seed stands clear
+            (:func:`darcyan.dense.maps.trusted`). 0: never in doubt.
+        verify_sparse_below: feature matches that no dense map follows (``darcyan match``
+            without ``--dense``, ``darcyan bench``'s sparse records) are verified, as a
+            matching in doubt is, when the margin is below this, in doubt or not
+            (``Correspondence.to_verify``). On remeshed copies the test's orientation agreement
+            is noisy on people (about +-0.2 for every candidate, times five matches), and
+            wrong matchings won by margins up to about 0.7 that a margin of 0.25 left
+            unverified (``docs/decisions/matching.md``). The dense stage's doubt stays
+            ``verify_below``'s: a dense map weighs the alternatives itself.
     """
 
     samples: int = _stage(800, MATCH)
@@ -245,6 +255,7 @@ class MirrorTest:
     handedness_weight: float = _stage(2.0, MATCH)
     seed: int = _stage(0, MATCH)
     verify_below: float = _stage(0.25, MATCH)
+    verify_sparse_below: float = _stage(0.75, MATCH)
 
     def __post_init__(self) -> None:
         lengths = self.signature_lengths
@@ -254,7 +265,8 @@ class MirrorTest:
         _check(self, ("samples", "neighbours", "target_points", "candidates", "profile_levels"),
                lambda v: _integer(v) and v >= 1, "a positive integer")
         _check(self, ("min_sine",), lambda v: _number(v) and 0 <= v < 1, "in [0, 1)")
-        _check(self, ("signature_weight", "orientation_weight", "handedness_weight", "verify_below"),
+        _check(self, ("signature_weight", "orientation_weight", "handedness_weight", "verify_below",
+                      "verify_sparse_below"),
                lambda v: _number(v) and v >= 0, ">= 0")
         _check(self, ("profile_agreement",), lambda v: isinstance(v, (int, float)) and v > 0,
                "positive (inf: trust every profile)")

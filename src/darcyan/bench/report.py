@@ -229,8 +229,9 @@ def report_markdown(results: dict) -> str:
                          f"of a pair (for pyfm the whole functional-map pipeline; per-shape work is cached and not counted).")
             o = m["overall"]
             if "verified_pairs" in o:
-                lines.append(f"\nMatchings in doubt (the orientation test's margin below `mirror.verify_below`), "
-                             f"verified by short dense maps: {o['verified_pairs']} pairs, {o['verify_changed']} "
+                lines.append(f"\nMatchings whose orientation test's margin is below `mirror.verify_sparse_below` (or, "
+                             f"in doubt, `mirror.verify_below`), verified by short dense maps: {o['verified_pairs']} "
+                             f"pairs, {o['verify_changed']} "
                              f"changed" + (f", {o['verify_failed']} could not be verified" if o["verify_failed"] else "")
                              + f". Without it: {o['correct_unverified']} of {o['matches_unverified']} matches "
                              f"correct; with it: {o['correct']} of {o['matches']} (the rates above).")

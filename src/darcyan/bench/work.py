@@ -248,6 +248,7 @@ def _sparse_records(job: dict, target: Shape) -> list:
     records = []
     for method in job["methods"]:
         start = time.perf_counter()
+        verified = None  # what the record says of a verification (darcyan's matchings only)
         if method == "pyfm":
             source = prepared_shape(job["source_path"], settings.repair, settings.config)
             point_map = _pyfm_map(job, source, target)
@@ -279,8 +280,8 @@ def _sparse_records(job: dict, target: Shape) -> list:
             "errors_sym": json_floats(score.errors_sym), "repeatable": score.repeatable.tolist(),
             "repeatable_sym": score.repeatable_sym.tolist(), "seconds": seconds,
             **({"margin": json_floats([unverified.margin])[0]} if method == "darcyan" else {}),
-            **(verified if method == "darcyan" and unverified.in_doubt else {})})
-        if method == "darcyan" and unverified.in_doubt and unverified is not correspondence:
+            **(verified or {})})
+        if verified is not None and unverified is not correspondence:
             m = unverified.matches_12  # what the sparse matching alone would have scored
             before = score_pair(target.solver, target_features[m.target], true_t, sym_t, target_features,
                                 settings.threshold, match_rows=m.source, fields=fields)
@@ -290,7 +291,8 @@ def _sparse_records(job: dict, target: Shape) -> list:
 
 
 def _verified(job: dict, target: Shape, correspondence) -> tuple:
-    """A matching in doubt verified by short dense maps, as ``darcyan match`` does
+    """A matching verified by short dense maps (in doubt, or its margin below
+    ``mirror.verify_sparse_below``), as ``darcyan match`` does
     (:func:`darcyan.dense.verify.verified_file_matches`: kept in the run's cache): the matching
     and what the record says of it (``verified``: the seed's rank, 0 for the sparse matching;
     ``verify_failed`` when it could not be verified, the matching kept)."""

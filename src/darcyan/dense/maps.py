@@ -523,7 +523,7 @@ def matching_of_map(correspondence, made: DenseMap, description_1, description_2
     Returns:
         a :class:`~darcyan.method.pipeline.Correspondence` whose distances are the descriptors'
         (as the sparse stage measures them), with the sparse matching and its alternatives as
-        its alternatives, and the sparse matching's ``margin`` and ``in_doubt``.
+        its alternatives, and the sparse matching's ``margin``, ``in_doubt`` and ``to_verify``.
     """
     from ..method.matching import Matches, descriptor_distances
     from ..method.pipeline import Correspondence
@@ -547,6 +547,7 @@ def matching_of_map(correspondence, made: DenseMap, description_1, description_2
                           alternatives=(correspondence, *getattr(correspondence, "alternatives", ())),
                           margin=getattr(correspondence, "margin", np.inf),
                           in_doubt=getattr(correspondence, "in_doubt", False),
+                          to_verify=getattr(correspondence, "to_verify", False),
                           feature_counts=(len(description_1.feature_vertices), len(description_2.feature_vertices)))
 
 

@@ -150,9 +150,12 @@ class Correspondence:
     files; ``distance (k,)`` the descriptor L2 distances; ``matches_12`` the same as indices into
     the two feature sets; ``alternatives`` the other matchings the orientation test weighed (best
     first). ``margin``: how far the matching's total in the orientation test stands above the
-    runner-up's (exact below ``config.mirror.verify_below``, ``inf`` without a runner-up);
-    ``in_doubt``: below it, so that short dense maps should decide
-    (:func:`darcyan.dense.verified_matches`; ``darcyan match`` and ``darcyan bench`` do).
+    runner-up's (exact below the larger of ``config.mirror.verify_below`` and
+    ``verify_sparse_below``, ``inf`` without a runner-up); ``in_doubt``: below
+    ``verify_below``, so that short dense maps should decide (:func:`darcyan.dense.verified_matches`;
+    ``darcyan match`` and ``darcyan bench`` do), and a dense map reads it; ``to_verify``: in
+    doubt or below ``verify_sparse_below``: feature matches that no dense map follows are
+    verified (:func:`darcyan.api.verification_wanted`).
     ``feature_counts``: ``(k1, k2)`` the feature points of each shape, matched or not (empty:
     not known), which tells a dense map whether every extremity of the shape with fewer is
     anchored by a landmark (:func:`darcyan.dense.signatures.signature_turn_weight`).
@@ -166,6 +169,7 @@ class Correspondence:
     margin: float = np.inf
     in_doubt: bool = False
     feature_counts: tuple = ()
+    to_verify: bool = False
 
     def __len__(self) -> int:
         return len(self.source_vertex)
@@ -503,7 +507,7 @@ def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
         candidates = consistent_candidates(shape_1.descriptors, shape_2.descriptors, shape_1.feature_geodesics,
                                            shape_2.feature_geodesics, config.consistency)
         matches, margin = weigh_orientations(candidates, shape_1.surface, shape_2.surface, config.mirror,
-                                             near=config.mirror.verify_below)
+                                             near=max(config.mirror.verify_below, config.mirror.verify_sparse_below))
         alternatives = [m for _, m in candidates[:config.mirror.candidates] if m is not matches]
     else:
         matches = match_descriptors(shape_1.descriptors, shape_2.descriptors, config.matching)
@@ -514,9 +518,10 @@ def match_shapes(shape_1: ShapeDescription, shape_2: ShapeDescription,
     def correspondence(matches: Matches, alternatives=(), margin=np.inf) -> Correspondence:
         matches = drop_dissimilar(matches, shape_1.descriptors, shape_2.descriptors, config.max_match_distance,
                                   median)
+        doubt = bool(margin < config.mirror.verify_below and alternatives)
         return Correspondence(shape_1.feature_vertices[matches.source], shape_2.feature_vertices[matches.target],
-                              matches.distance, matches, tuple(alternatives), float(margin),
-                              bool(margin < config.mirror.verify_below and alternatives), feature_counts)
+                              matches.distance, matches, tuple(alternatives), float(margin), doubt, feature_counts,
+                              doubt or bool(margin < config.mirror.verify_sparse_below and alternatives))
 
     return correspondence(matches, [correspondence(m) for m in alternatives], margin)
 
