@@ -202,6 +202,8 @@ def test_the_matching_of_a_seed_keeps_the_others_as_alternatives():
     # the sparse stage's doubt is the matching's, whichever seed is taken (the trust rule reads it)
     doubtful = dataclasses.replace(sparse, in_doubt=True, margin=0.1)
     assert matching_of_seed(doubtful, 2).in_doubt and matching_of_seed(doubtful, 2).margin == 0.1
+    narrow = dataclasses.replace(sparse, margin=0.5, to_verify=True)  # not in doubt, still to verify
+    assert matching_of_seed(narrow, 2).to_verify and not matching_of_seed(narrow, 2).in_doubt
     with pytest.raises(DarcyanError, match="seed 4: the matching has 3 alternatives"):
         matching_of_seed(sparse, 4)
 

@@ -1,9 +1,10 @@
 """The front door: :func:`correspond` does from Python what ``darcyan match`` does.
 
 It describes the shapes (with the on-disk cache, several at once), matches the source with each
-target, verifies a matching the sparse stage is in doubt of (:mod:`darcyan.dense.verify`) and, when
-asked, makes the dense map; :class:`Correspondences` holds what came out and writes it exactly as
-``darcyan match ... -o`` does (the command is a shell over this module).
+target, verifies a matching the sparse stage is in doubt of or won by a small margin
+(:mod:`darcyan.dense.verify`; ``Correspondence.to_verify``) and, when asked, makes the dense
+map; :class:`Correspondences` holds what came out and writes it exactly as ``darcyan match ...
+-o`` does (the command is a shell over this module).
 """
 
 from __future__ import annotations
@@ -41,7 +42,8 @@ class PairResult:
     Attributes:
         target: the target's name (its path, or the name of a mesh given in memory).
         matches: the feature matches (:class:`~darcyan.method.pipeline.Correspondence`, input
-            numbering), verified when that was asked or the matching was in doubt; with a dense
+            numbering), verified when that was asked or the matching was to be verified
+            (``to_verify``: in doubt, or won by a margin below ``mirror.verify_sparse_below``); with a dense
             map, the matching that seeded it (:func:`matches_of_map`).
         dense: the dense map (:class:`~darcyan.dense.maps.DenseMap`) with ``dense=True``, else ``None``.
         verification: what the verification said (``seed``, ``signatures``, ``clear``,
@@ -182,8 +184,9 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
         cache: keep and reuse shape descriptions and verifications on disk (``True``: the
             default cache, ``$DARCYAN_CACHE``; a :class:`~darcyan.io.cache.ShapeCache`; ``False``:
             none). Files only: shapes given in memory are described anew.
-        verify: ``"auto"`` verifies a matching the sparse stage is in doubt of (without
-            ``dense``); ``True`` every matching (``--verify``); ``False`` none (``--no-verify``).
+        verify: ``"auto"`` verifies a matching the sparse stage is in doubt of or won by a margin
+            below ``config.mirror.verify_sparse_below`` (without ``dense``); ``True`` every
+            matching (``--verify``); ``False`` none (``--no-verify``).
         repair: weld coincident boundary vertices (``--repair``); the ordinary repairs are made
             anyway, unless ``config.repairing.strict``.
         jobs: shapes described at once, in worker processes (files not yet cached).

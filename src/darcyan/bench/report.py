@@ -79,7 +79,7 @@ def summarize_records(records: list, threshold: float) -> dict:
             values = [c[key] for c in classes.values() if c[key] is not None]
             overall[f"{key}_class_mean"] = float(np.mean(values)) if values else None
         overall["pair_seconds"] = float(sum(r["seconds"] for r in rows))
-        if any("margin" in r for r in rows):  # darcyan: the matchings in doubt, verified by dense maps
+        if any("margin" in r for r in rows):  # darcyan: the matchings to verify (to_verify), verified by dense maps
             overall["verified_pairs"] = sum("verified" in r for r in rows)
             overall["verify_changed"] = sum(r.get("verified", 0) != 0 for r in rows)
             overall["verify_failed"] = sum("verify_failed" in r for r in rows)

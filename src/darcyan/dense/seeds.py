@@ -76,7 +76,7 @@ def matching_of_seed(correspondence, rank: int):
     chosen = matchings[rank]
     if rank > 0:  # the sparse stage's doubt and margin are the matching's, whichever seed is taken
         chosen = dataclasses.replace(chosen, alternatives=tuple(m for m in matchings if m is not chosen),
-                                     **{name: getattr(correspondence, name) for name in ("in_doubt", "margin")
+                                     **{name: getattr(correspondence, name) for name in ("in_doubt", "margin", "to_verify")
                                         if hasattr(correspondence, name) and hasattr(chosen, name)})
     return chosen
 

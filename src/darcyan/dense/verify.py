@@ -1,4 +1,5 @@
-"""Verifying a matching in doubt, once per pair of files: :func:`verified_file_matches`.
+"""Verifying a matching (in doubt, or won by a small margin: ``Correspondence.to_verify``), once
+per pair of files: :func:`verified_file_matches`.
 
 The verification (:func:`darcyan.dense.seeds.verified_matches`) prepares both shapes and runs a
 short ZoomOut per candidate matching: seconds on large meshes, against a tenth of a second for a
