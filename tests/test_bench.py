@@ -449,3 +449,32 @@ def test_bench_verifies_the_matchings_in_doubt(capsys, tmp_path, figures, monkey
     records = [json.loads(line) for line in (tmp_path / "again" / "pairs.jsonl").read_text().splitlines()]
     assert {(r["source"], r["target"]): r.get("verified") for r in records} == first
     assert not any("verify_failed" in r for r in records)
+
+
+def test_verify_thresholds_reads_each_threshold_from_two_runs(tmp_path, capsys):
+    """benchmarks/verify_thresholds.py: below a threshold a pair takes the verified run's matches,
+    at or above it the default run's (margins 0.1, 0.5 and 2; the verified run mends the second
+    pair and breaks the third)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "verify_thresholds.py"
+    spec = importlib.util.spec_from_file_location("verify_thresholds", path)
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+
+    def journal(folder, rows):
+        folder.mkdir()
+        (folder / "pairs.jsonl").write_text("".join(json.dumps({"method": "darcyan", "source": s, "target": t,
+                                                                "correct": c, "matches": 5, "margin": m}) + "\n"
+                                                    for s, t, c, m in rows))
+
+    journal(tmp_path / "default", [("a", "b", 5, 0.1), ("a", "c", 3, 0.5), ("b", "c", 5, 2.0)])
+    journal(tmp_path / "all", [("a", "b", 5, 0.1), ("a", "c", 5, 0.5), ("b", "c", 1, 2.0)])
+    assert script.main([str(tmp_path / "default"), str(tmp_path / "all"), "--thresholds", "0.25", "0.75", "3"]) == 0
+    out = capsys.readouterr().out
+    assert "| 0.25 | 86.67% | 13 / 15 | 1 |" in out
+    assert "| 0.75 | 100.00% | 15 / 15 | 2 |" in out
+    assert "| 3 | 73.33% | 11 / 15 | 3 |" in out
+    assert "a -> c: margin 0.50, 3 of 5 -> 5 of 5" in out and "b -> c: margin 2.00, 5 of 5 -> 1 of 5" in out
+    assert script.main([str(tmp_path / "default"), str(tmp_path / "missing")]) == 2
