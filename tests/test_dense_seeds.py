@@ -86,6 +86,17 @@ def test_cli_verify_writes_the_verified_matches(small_pose_files, tmp_path, caps
     assert rows and set(rows[0]) == {"source_vertex", "target_vertex", "distance"}
 
 
+def _matched_faust_pair(faust, source: str, target: str, tmp_path, monkeypatch) -> tuple:
+    """``(source path, target path, --truth argument, config, the two descriptions, their
+    Correspondence)`` of a faust-5k pair with the defaults, the cache in ``tmp_path``."""
+    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
+    paths = faust / f"{source}.off", faust / f"{target}.off"
+    truth = f"{faust / 'corres' / f'{source}.vts'},{faust / 'corres' / f'{target}.vts'}"
+    config = DarcyanConfig()
+    first, second = (analyze_mesh(load_mesh(p), config) for p in paths)
+    return (*paths, truth, config, first, second, match_shapes(first, second, config))
+
+
 @pytest.mark.slow
 def test_a_matching_won_by_a_small_margin_is_verified_without_a_dense_map(faust, tmp_path, monkeypatch, capsys):
     """tr_reg_032 -> tr_reg_033 (one person): the orientation test prefers a matching with two
@@ -93,12 +104,8 @@ def test_a_matching_won_by_a_small_margin_is_verified_without_a_dense_map(faust,
     verify_below (not in doubt) but below verify_sparse_below: `darcyan match` verifies it and
     the short dense maps choose the right one (5 of 5); with --dense it is not verified (the dense
     map weighs the alternatives itself)."""
-    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
-    source, target = faust / "tr_reg_032.off", faust / "tr_reg_033.off"
-    truth = f"{faust / 'corres' / 'tr_reg_032.vts'},{faust / 'corres' / 'tr_reg_033.vts'}"
-    config = DarcyanConfig()
-    first, second = (analyze_mesh(load_mesh(p), config) for p in (source, target))
-    correspondence = match_shapes(first, second, config)
+    source, target, truth, config, first, second, correspondence = _matched_faust_pair(
+        faust, "tr_reg_032", "tr_reg_033", tmp_path, monkeypatch)
     assert config.mirror.verify_below <= correspondence.margin < config.mirror.verify_sparse_below
     assert correspondence.to_verify and not correspondence.in_doubt
     sooner = config.replace(mirror=dataclasses.replace(config.mirror, verify_sparse_below=0.25))
@@ -117,12 +124,8 @@ def test_a_matching_in_doubt_is_verified_by_default(faust, tmp_path, monkeypatch
     """tr_reg_016 -> tr_reg_049 (two people): the orientation test prefers a mirrored matching
     by a margin of 0.05 (1 of 5 matches right by the vts ground truth); in doubt, the short dense
     maps choose the right one (5 of 5). --no-verify keeps the test's choice."""
-    monkeypatch.setenv("DARCYAN_CACHE", str(tmp_path / "cache"))
-    source, target = faust / "tr_reg_016.off", faust / "tr_reg_049.off"
-    truth = f"{faust / 'corres' / 'tr_reg_016.vts'},{faust / 'corres' / 'tr_reg_049.vts'}"
-    config = DarcyanConfig()
-    first, second = (analyze_mesh(load_mesh(p), config) for p in (source, target))
-    correspondence = match_shapes(first, second, config)
+    source, target, truth, config, first, second, correspondence = _matched_faust_pair(
+        faust, "tr_reg_016", "tr_reg_049", tmp_path, monkeypatch)
     assert correspondence.in_doubt and correspondence.margin < config.mirror.verify_below
     never = config.replace(mirror=dataclasses.replace(config.mirror, verify_below=0.0))
     assert not match_shapes(first, second, never).in_doubt

@@ -233,10 +233,9 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
         matches = match_shapes(descriptions[0], description, config)
         verification = None
         if verification_wanted(matches, verify, dense):
-            why = "" if verify is True else (
-                f" (in doubt: the orientation test's margin {matches.margin:.2f} < {config.mirror.verify_below:g})"
-                if matches.in_doubt else
-                f" (the orientation test's margin {matches.margin:.2f} < {config.mirror.verify_sparse_below:g})")
+            below = config.mirror.verify_below if matches.in_doubt else config.mirror.verify_sparse_below
+            why = "" if verify is True else (f" ({'in doubt: ' if matches.in_doubt else ''}the orientation test's "
+                                             f"margin {matches.margin:.2f} < {below:g})")
             say(f"verifying the matches{why}")
             try:
                 matches, verification = _verified(inputs[0], inputs[index], matches, lambda i=index: (shape_of(0),
