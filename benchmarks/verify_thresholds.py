@@ -23,7 +23,11 @@ from pathlib import Path
 
 def sparse_records(folder: Path, method: str = "darcyan") -> dict:
     """``(source, target) -> record``: the sparse records of ``method`` in one bench folder."""
-    rows = [json.loads(line) for line in (folder / "pairs.jsonl").read_text().splitlines() if line.strip()]
+    path = folder / "pairs.jsonl"
+    try:
+        rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    except ValueError as exc:
+        raise ValueError(f"{path}: not a bench journal ({exc})") from None
     return {(r["source"], r["target"]): r for r in rows
             if r.get("method") == method and r.get("kind", "sparse") == "sparse" and "correct" in r}
 
@@ -51,7 +55,7 @@ def main(argv=None) -> int:
     try:
         default, verified = sparse_records(args.default), sparse_records(args.verified)
     except (OSError, ValueError, KeyError) as exc:
-        print(f"verify_thresholds: cannot read the runs: {exc}", file=sys.stderr)
+        print(f"verify_thresholds: {exc}", file=sys.stderr)
         return 2
     missing = sorted(set(default) - set(verified))
     if missing:
