@@ -82,3 +82,27 @@ def test_smooth_basis_on_a_proxy_spans_the_sphere_harmonics(sphere):
     fifth = shape.smooth_basis(9, 1000)[:, 4:]
     fitted = coordinates @ np.linalg.lstsq(coordinates, fifth, rcond=None)[0]
     assert np.linalg.norm(fitted - fifth) > 0.5 * np.linalg.norm(fifth)
+
+
+def test_a_coarse_shape_keeps_the_units_and_its_nearest_vertices_are_near(sphere):
+    """The proxy as a shape of its own: on the sphere of radius 2 (normalized to area 1) its
+    vertices lie on the same sphere, its input numbering is its own, and every full vertex's
+    nearest copy vertex is within one of the copy's edges of it."""
+    from darcyan.geometry.shape import prepare_shape
+
+    shape = prepare_shape(sphere)
+    assert shape.coarse_shape(6000) is None  # 10k vertices: no proxy of 6000
+    coarse = shape.coarse_shape(2000)
+    assert coarse is shape.coarse_shape(2000) and 1500 < coarse.n_vertices < 2500
+    radius = np.sqrt(1 / (4 * np.pi))  # area 1
+    np.testing.assert_allclose(np.linalg.norm(coarse.mesh.vertices, axis=1), radius, rtol=0.01)
+    np.testing.assert_array_equal(coarse.mesh_index(np.arange(coarse.n_vertices)), np.arange(coarse.n_vertices))
+    nearest = shape.proxy(2000).nearest_vertices(np.arange(shape.n_vertices))
+    gap = np.linalg.norm(coarse.mesh.vertices[nearest] - shape.mesh.vertices, axis=1)
+    edges = coarse.mesh.edges()
+    mean_edge = np.linalg.norm(np.diff(coarse.mesh.vertices[edges], axis=1), axis=2).mean()
+    assert gap.max() < 1.5 * mean_edge
+    # and at most an edge farther than the copy's nearest vertex in space
+    from scipy.spatial import cKDTree
+
+    assert (gap - cKDTree(coarse.mesh.vertices).query(shape.mesh.vertices)[0]).max() < mean_edge

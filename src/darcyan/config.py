@@ -401,6 +401,14 @@ class DenseConfig:
             which the median does not let decide (``docs/decisions/every-pair.md``).
         seed_basis, seed_samples: size of the short ZoomOut that scores each seed, and the
             samples it runs on.
+        verify_proxy_vertices: a verification of feature matches that no dense map follows
+            (:func:`darcyan.dense.verified_matches`) weighs the seeds of a mesh with more than
+            twice this many vertices on its coarse copy of about this many, the matches moved to
+            the copy's nearest vertices (:func:`darcyan.dense.seeds.on_coarse_shapes`); 0 (the
+            default): on the mesh itself. At 6000 a 52k pair's verification took about half
+            the time, but on tosca-hires's 666 pairs it chose worse: 5 matches fewer right, two
+            pairs more below 80% right, one of them 1 of 5 (``docs/decisions/speed.md``). A
+            dense map weighs its seeds on the mesh itself.
         signature_lengths: diffusion lengths (sqrt(area)) of the mean curvature in that signature.
         signature_smoothing, signature_diffusion_steps: the Meyer curvatures' one-ring averagings and
             the diffusions' backward-Euler steps in that signature; ``None``: the describe stage's
@@ -586,6 +594,7 @@ class DenseConfig:
     seed_statistic: str = "median"
     seed_basis: int = 30
     seed_samples: int = 1000
+    verify_proxy_vertices: int = 0
     signature_lengths: tuple = (0.02, 0.05, 0.1)
     signature_smoothing: int | None = None
     signature_diffusion_steps: int | None = None
@@ -644,7 +653,8 @@ class DenseConfig:
         for name in ("start_in_doubt", "rival_by_checks", "rival_sure_matching"):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"dense: {name} must be true or false, got {getattr(self, name)!r}")
-        for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "signature_until",
+        for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "verify_proxy_vertices",
+                     "signature_until",
                      "basis_margin", "margin_from", "alignment_rounds", "alignment_proxy_vertices",
                      "handle_max_vertices"):
             value = getattr(self, name)

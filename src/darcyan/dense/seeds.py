@@ -49,10 +49,46 @@ def verified_matches(shape_1, shape_2, correspondence, config: DenseConfig = Den
         DarcyanError: when no candidate has :data:`~darcyan.dense.landmarks.MIN_LANDMARKS` consistent matches.
     """
     shape_1, shape_2 = getattr(shape_1, "shape", shape_1), getattr(shape_2, "shape", shape_2)
-    scoring = config if full_basis else seed_scoring_config(config)
-    choice = choose_seed(shape_1, shape_2, correspondence, scoring, lambda stage: None, {}, spectral_start=False)
+    scoring, weighed = config, (shape_1, shape_2, correspondence)
+    if not full_basis:
+        scoring, weighed = seed_scoring_config(config), on_coarse_shapes(shape_1, shape_2, correspondence,
+                                                                        config.verify_proxy_vertices)
+    choice = choose_seed(*weighed, scoring, lambda stage: None, {}, spectral_start=False)
     verdict = check_of_seeds(choice.seed, choice.seeds, config.seed_margin)
     return matching_of_seed(correspondence, choice.seed.rank), verdict.as_dict()
+
+
+def on_coarse_shapes(shape_1, shape_2, correspondence, vertices: int) -> tuple:
+    """``(shape_1, shape_2, correspondence)`` with each shape of more than twice ``vertices``
+    vertices replaced by its coarse copy (:meth:`~darcyan.geometry.shape.Shape.coarse_shape`) and
+    the matchings' vertices (``correspondence`` and its ``alternatives``) moved to the copy's
+    nearest ones: what a verification weighs its seeds on. A seed's short map is read at a
+    thousand points, on smooth fields that the copy keeps (the basis and the signature of a
+    large mesh come from that copy anyway), so the full mesh's fast marchings and per-vertex
+    turns cost seconds for nothing (``docs/decisions/speed.md``). As given when ``vertices`` is
+    0, no shape has a copy, or a matched vertex is not on its prepared mesh."""
+    if vertices <= 0:
+        return shape_1, shape_2, correspondence
+    coarse = [shape.coarse_shape(vertices) for shape in (shape_1, shape_2)]
+    if coarse == [None, None]:
+        return shape_1, shape_2, correspondence
+    matchings = [correspondence] + list(getattr(correspondence, "alternatives", ()))
+
+    def carried(shape, copy, input_vertices):
+        if copy is None:
+            return np.asarray(input_vertices)
+        local = shape.mesh_index(input_vertices)
+        return None if (local < 0).any() else shape.proxy(vertices).nearest_vertices(local)
+
+    moved = []
+    for matching in matchings:
+        source = carried(shape_1, coarse[0], matching.source_vertex)
+        target = carried(shape_2, coarse[1], matching.target_vertex)
+        if source is None or target is None:
+            return shape_1, shape_2, correspondence
+        moved.append(dataclasses.replace(matching, source_vertex=source, target_vertex=target, alternatives=()))
+    first = dataclasses.replace(moved[0], alternatives=tuple(moved[1:]))
+    return (coarse[0] or shape_1), (coarse[1] or shape_2), first
 
 
 def seed_scoring_config(config: DenseConfig) -> DenseConfig:

@@ -172,6 +172,23 @@ class Shape:
 
         return self._once(("proxy", vertices), lambda: coarse_proxy(self.mesh, vertices))
 
+    def coarse_shape(self, vertices: int) -> "Shape | None":
+        """The :meth:`proxy` of about ``vertices`` vertices as a shape of its own (the same units;
+        its input numbering is the copy's vertices: :meth:`CoarseProxy.nearest_vertices
+        <darcyan.geometry.proxy.CoarseProxy.nearest_vertices>` carries a vertex of this shape
+        there), or ``None`` when there is no proxy. Built once per shape and size."""
+        proxy = self.proxy(vertices)
+        if proxy is None:
+            return None
+
+        def build():
+            coarse = Mesh(proxy.mesh.vertices, proxy.mesh.faces, name=proxy.mesh.name)
+            positions = coarse.vertices.view()
+            positions.flags.writeable = False
+            return Shape(coarse, coarse.n_vertices, positions, self.normalization, repairing=self.repairing)
+
+        return self._once(("coarse shape", vertices), build)
+
     def derived(self, key: tuple, compute):
         """``compute()``, once per shape and ``key``: what a higher layer derives from the shape
         alone (e.g. the dense maps' point signature) is kept with it like its own operators."""
