@@ -16,7 +16,7 @@ import numpy as np
 from ..config import Repairing
 from ..errors import DarcyanError
 from .geodesics import GeodesicSolver, interpolate
-from .mesh import Mesh
+from .mesh import Mesh, local_index
 from .repair import nonmanifold_vertices, prepare_mesh
 
 
@@ -35,9 +35,11 @@ class CoarseProxy:
         import fast_simplification
 
         reduction = 1.0 - vertices / full.n_vertices
-        v, f = fast_simplification.simplify(full.vertices, full.faces, target_reduction=reduction,
-                                            agg=DECIMATION_AGGRESSIVENESS)
+        v, f, collapses = fast_simplification.simplify(full.vertices, full.faces, target_reduction=reduction,
+                                                       agg=DECIMATION_AGGRESSIVENESS, return_collapses=True)
         f = np.asarray(f, dtype=np.int64)
+        collapsed_into = _collapse_targets(full.faces, np.asarray(collapses, dtype=np.int64).reshape(-1, 2),
+                                           full.n_vertices, len(v))
         for _ in range(CLEANUP_ROUNDS):  # dropping faces can leave new bow ties behind
             f = _drop_nonmanifold_faces(f)
             bow_ties = nonmanifold_vertices(Mesh(v, f))
@@ -56,6 +58,36 @@ class CoarseProxy:
                                                           outward_cap_share=0.0))
         self.solver = GeodesicSolver(self.mesh)
         self._faces, self._bary = self.solver.locate(full.vertices)
+        self.strays = 0  # full vertices placed at their collapse vertex (:meth:`_keep_on_own_part`)
+        on_copy = np.full(full.n_vertices, -1, dtype=np.int64)
+        known = collapsed_into >= 0
+        on_copy[known] = local_index(self.mesh, collapsed_into[known])
+        self._keep_on_own_part(on_copy)
+
+    def _keep_on_own_part(self, collapsed_into: np.ndarray) -> None:
+        """Where two parts of the surface nearly touch (a hand on a hip, fingers side by side),
+        the copy's closest point to a full vertex can lie on the other part. Each full vertex
+        was collapsed into one vertex of the copy (``collapsed_into (n_full,)``, the copy's
+        numbering, -1 where the copy lost it): a closest point on a face with no corner in
+        that vertex's one-ring is replaced by the vertex itself."""
+        faces = self.mesh.faces
+        known = np.flatnonzero(collapsed_into >= 0)
+        target = collapsed_into[known]
+        corners = faces[self._faces[known]]  # (k, 3)
+        n = self.mesh.n_vertices
+        edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+        ring = np.unique(np.minimum(edges[:, 0], edges[:, 1]) * n + np.maximum(edges[:, 0], edges[:, 1]))
+        pairs = np.minimum(target[:, None], corners) * n + np.maximum(target[:, None], corners)
+        near = (corners == target[:, None]).any(axis=1) | np.isin(pairs, ring).any(axis=1)
+        stray = known[~near]
+        if not len(stray):
+            return
+        face_of = np.empty(n, dtype=np.int64)
+        face_of[faces.ravel()] = np.repeat(np.arange(len(faces)), 3)  # a face at each vertex
+        own = face_of[collapsed_into[stray]]
+        self._faces[stray] = own
+        self._bary[stray] = (faces[own] == collapsed_into[stray][:, None]).astype(np.float64)
+        self.strays = len(stray)
 
     def distance(self, vertex: int) -> np.ndarray:
         """``(n_full,)`` fast-marching distance on the copy from the point where the full mesh's
@@ -121,6 +153,28 @@ class InterpolatedRows:
     def __array__(self, dtype=None, copy=None) -> np.ndarray:
         out = self[:, :]
         return out if dtype is None else out.astype(dtype)
+
+
+def _collapse_targets(faces: np.ndarray, collapses: np.ndarray, n_full: int, n_decimated: int) -> np.ndarray:
+    """``(n_full,) int64``: the vertex of the decimated mesh (its ``n_decimated`` vertices, as
+    ``fast_simplification.simplify`` numbers them) that each vertex of the full mesh was
+    collapsed into, following ``collapses (c, 2)`` (``[kept, removed]`` in full numbering) to the
+    end; -1 for the few that end on a vertex no face keeps. What
+    ``fast_simplification.replay_simplification`` gives, without replaying the decimation."""
+    into = np.arange(n_full)
+    into[collapses[:, 1]] = collapses[:, 0]
+    while True:  # each vertex is removed once: follow the chains by pointer jumping
+        further = into[into]
+        if np.array_equal(further, into):
+            break
+        into = further
+    on_faces = into[faces]
+    kept = (on_faces[:, 0] != on_faces[:, 1]) & (on_faces[:, 1] != on_faces[:, 2]) & (on_faces[:, 0] != on_faces[:, 2])
+    survivors = np.unique(on_faces[kept])  # the decimated mesh keeps them in this order
+    if len(survivors) != n_decimated:
+        return np.full(len(into), -1, dtype=np.int64)
+    position = np.minimum(np.searchsorted(survivors, into), len(survivors) - 1)
+    return np.where(survivors[position] == into, position, -1).astype(np.int64)
 
 
 def _drop_nonmanifold_faces(faces: np.ndarray) -> np.ndarray:
