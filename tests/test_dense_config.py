@@ -14,7 +14,8 @@ def test_dense_config_rejects_a_bad_commutativity():
 
 
 def test_dense_config_rejects_a_bad_margin():
-    for bad in (dict(basis_margin=-1), dict(margin_from=2.5), dict(basis_margin="10")):
+    for bad in (dict(basis_margin=-1), dict(margin_from=2.5), dict(basis_margin="10"), dict(verify_proxy_vertices=-1),
+                dict(verify_proxy_vertices=1.5)):
         with pytest.raises(ConfigError, match=f"dense: {next(iter(bad))} must be a non-negative integer"):
             DenseConfig(**bad)
 

@@ -58,18 +58,18 @@ class CoarseProxy:
                                                           outward_cap_share=0.0))
         self.solver = GeodesicSolver(self.mesh)
         self._faces, self._bary = self.solver.locate(full.vertices)
-        self.strays = 0  # full vertices placed at their collapse vertex (:meth:`_keep_on_own_part`)
         on_copy = np.full(full.n_vertices, -1, dtype=np.int64)
         known = collapsed_into >= 0
         on_copy[known] = local_index(self.mesh, collapsed_into[known])
-        self._keep_on_own_part(on_copy)
+        self._keep_on_own_part(full.vertices, on_copy)
 
-    def _keep_on_own_part(self, collapsed_into: np.ndarray) -> None:
-        """Where two parts of the surface nearly touch (a hand on a hip, fingers side by side),
-        the copy's closest point to a full vertex can lie on the other part. Each full vertex
-        was collapsed into one vertex of the copy (``collapsed_into (n_full,)``, the copy's
-        numbering, -1 where the copy lost it): a closest point on a face with no corner in
-        that vertex's one-ring is replaced by the vertex itself."""
+    def _keep_on_own_part(self, positions: np.ndarray, collapsed_into: np.ndarray) -> None:
+        """Where two parts of the surface nearly touch (a hand held to the head, fingers side by
+        side), the copy's closest point to a full vertex can lie on the other part. Each full
+        vertex (``positions (n_full, 3)``) was collapsed into one vertex of the copy
+        (``collapsed_into (n_full,)``, the copy's numbering, -1 where the copy lost it), on its
+        own part: a closest point on a face with no corner in that vertex's one-ring is replaced
+        by the closest point on the faces around that vertex."""
         faces = self.mesh.faces
         known = np.flatnonzero(collapsed_into >= 0)
         target = collapsed_into[known]
@@ -80,14 +80,25 @@ class CoarseProxy:
         pairs = np.minimum(target[:, None], corners) * n + np.maximum(target[:, None], corners)
         near = (corners == target[:, None]).any(axis=1) | np.isin(pairs, ring).any(axis=1)
         stray = known[~near]
+        self.strays = len(stray)
         if not len(stray):
             return
-        face_of = np.empty(n, dtype=np.int64)
-        face_of[faces.ravel()] = np.repeat(np.arange(len(faces)), 3)  # a face at each vertex
-        own = face_of[collapsed_into[stray]]
-        self._faces[stray] = own
-        self._bary[stray] = (faces[own] == collapsed_into[stray][:, None]).astype(np.float64)
-        self.strays = len(stray)
+        around = collapsed_into[stray]
+        corner_of = faces.ravel()
+        order = np.argsort(corner_of, kind="stable")
+        start = np.searchsorted(corner_of[order], np.arange(n + 1))  # faces at vertex v: order[start[v]:start[v + 1]] // 3
+        count = start[around + 1] - start[around]
+        best = np.full(len(stray), np.inf)
+        for j in range(int(count.max())):
+            has = np.flatnonzero(count > j)
+            face = order[start[around[has]] + j] // 3
+            bary = closest_barycentric(positions[stray[has]], *(self.mesh.vertices[faces[face, i]] for i in range(3)))
+            point = np.einsum("kc,kcd->kd", bary, self.mesh.vertices[faces[face]])
+            gap = np.einsum("kd,kd->k", point - positions[stray[has]], point - positions[stray[has]])
+            better = gap < best[has]
+            best[has[better]] = gap[better]
+            self._faces[stray[has[better]]] = face[better]
+            self._bary[stray[has[better]]] = bary[better]
 
     def distance(self, vertex: int) -> np.ndarray:
         """``(n_full,)`` fast-marching distance on the copy from the point where the full mesh's
@@ -153,6 +164,35 @@ class InterpolatedRows:
     def __array__(self, dtype=None, copy=None) -> np.ndarray:
         out = self[:, :]
         return out if dtype is None else out.astype(dtype)
+
+
+def closest_barycentric(points: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """``(k, 3)`` barycentric coordinates of the point of triangle ``(a[i], b[i], c[i])`` closest
+    to ``points[i]`` (all ``(k, 3)``), by the regions of Ericson's *Real-Time Collision
+    Detection* (5.1.5): a corner, a side or the inside."""
+    ab, ac = b - a, c - a
+    ap, bp, cp = points - a, points - b, points - c
+    d1, d2 = np.einsum("kd,kd->k", ab, ap), np.einsum("kd,kd->k", ac, ap)
+    d3, d4 = np.einsum("kd,kd->k", ab, bp), np.einsum("kd,kd->k", ac, bp)
+    d5, d6 = np.einsum("kd,kd->k", ab, cp), np.einsum("kd,kd->k", ac, cp)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        on_ab = d1 / (d1 - d3)
+        on_ac = d2 / (d2 - d6)
+        on_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        total = va + vb + vc
+        v, w = vb / total, vc / total
+    regions = [(d1 <= 0) & (d2 <= 0), (d3 >= 0) & (d4 <= d3), (vc <= 0) & (d1 >= 0) & (d3 <= 0),
+               (d6 >= 0) & (d5 <= d6), (vb <= 0) & (d2 >= 0) & (d6 <= 0), (va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0)]
+    zero, one = np.zeros_like(d1), np.ones_like(d1)
+    choices = [np.stack(x, axis=1) for x in ((one, zero, zero), (zero, one, zero), (1 - on_ab, on_ab, zero),
+                                               (zero, zero, one), (1 - on_ac, zero, on_ac),
+                                               (zero, 1 - on_bc, on_bc))]
+    inside = np.stack((1 - v - w, v, w), axis=1)
+    out = inside
+    for region, choice in zip(regions[::-1], choices[::-1]):  # the first region that holds wins
+        out = np.where(region[:, None], choice, out)
+    return np.nan_to_num(out, nan=1.0 / 3.0)
 
 
 def _collapse_targets(faces: np.ndarray, collapses: np.ndarray, n_full: int, n_decimated: int) -> np.ndarray:
