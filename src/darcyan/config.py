@@ -405,9 +405,10 @@ class DenseConfig:
             (:func:`darcyan.dense.verified_matches`) weighs the seeds of a mesh with more than
             twice this many vertices on its coarse copy of about this many, the matches moved to
             the copy's nearest vertices (:func:`darcyan.dense.seeds.on_coarse_shapes`); 0 (the
-            default): on the mesh itself. At 6000 a 52k pair's verification took about half
-            the time, but on tosca-hires's 666 pairs it chose worse: 5 matches fewer right, two
-            pairs more below 80% right, one of them 1 of 5 (``docs/decisions/speed.md``). A
+            default): on the mesh itself. Faster on large pairs, but at 6000 it chose worse
+            on tosca-hires's 666 pairs (measured before the copies' vertices were read on their
+            own part: 5 matches fewer right, two pairs more below 80% right, one of them 1 of 5;
+            ``docs/decisions/speed.md``). Two matched vertices may fall on one copy vertex. A
             dense map weighs its seeds on the mesh itself.
         signature_lengths: diffusion lengths (sqrt(area)) of the mean curvature in that signature.
         signature_smoothing, signature_diffusion_steps: the Meyer curvatures' one-ring averagings and

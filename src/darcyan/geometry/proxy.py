@@ -68,8 +68,10 @@ class CoarseProxy:
         side), the copy's closest point to a full vertex can lie on the other part. Each full
         vertex (``positions (n_full, 3)``) was collapsed into one vertex of the copy
         (``collapsed_into (n_full,)``, the copy's numbering, -1 where the copy lost it), on its
-        own part: a closest point on a face with no corner in that vertex's one-ring is replaced
-        by the closest point on the faces around that vertex."""
+        own part: a closest point on a face with no corner in that vertex's one-ring is taken
+        for one on another part (some are on the same part, where decimation moved the kept
+        vertex far) and replaced by the closest point on the faces around that vertex.
+        ``strays``: how many were replaced."""
         faces = self.mesh.faces
         known = np.flatnonzero(collapsed_into >= 0)
         target = collapsed_into[known]
@@ -192,22 +194,31 @@ def closest_barycentric(points: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.
     out = inside
     for region, choice in zip(regions[::-1], choices[::-1]):  # the first region that holds wins
         out = np.where(region[:, None], choice, out)
-    return np.nan_to_num(out, nan=1.0 / 3.0)
+    degenerate = ~np.isfinite(out).all(axis=1)  # a triangle of no area: its nearest corner
+    if degenerate.any():
+        corners = np.stack([a[degenerate], b[degenerate], c[degenerate]], axis=1)
+        nearest = np.argmin(np.linalg.norm(corners - points[degenerate, None, :], axis=2), axis=1)
+        out[degenerate] = np.eye(3)[nearest]
+    return out
 
 
 def _collapse_targets(faces: np.ndarray, collapses: np.ndarray, n_full: int, n_decimated: int) -> np.ndarray:
     """``(n_full,) int64``: the vertex of the decimated mesh (its ``n_decimated`` vertices, as
     ``fast_simplification.simplify`` numbers them) that each vertex of the full mesh was
     collapsed into, following ``collapses (c, 2)`` (``[kept, removed]`` in full numbering) to the
-    end; -1 for the few that end on a vertex no face keeps. What
-    ``fast_simplification.replay_simplification`` gives, without replaying the decimation."""
+    end; -1 for the few that end on a vertex no face keeps (``replay_simplification`` sends
+    those to a neighbour). Elsewhere what ``fast_simplification.replay_simplification`` gives,
+    without replaying the decimation. All -1 (every vertex then keeps its closest point on the
+    copy) when the collapses do not lead to ``n_decimated`` vertices or do not end."""
     into = np.arange(n_full)
     into[collapses[:, 1]] = collapses[:, 0]
-    while True:  # each vertex is removed once: follow the chains by pointer jumping
+    for _ in range(64):  # each vertex is removed once: follow the chains by pointer jumping
         further = into[into]
         if np.array_equal(further, into):
             break
         into = further
+    else:  # a cycle: not collapses of one decimation
+        return np.full(n_full, -1, dtype=np.int64)
     on_faces = into[faces]
     kept = (on_faces[:, 0] != on_faces[:, 1]) & (on_faces[:, 1] != on_faces[:, 2]) & (on_faces[:, 0] != on_faces[:, 2])
     survivors = np.unique(on_faces[kept])  # the decimated mesh keeps them in this order
@@ -240,11 +251,10 @@ def coarse_proxy(mesh: Mesh, vertices: int) -> CoarseProxy | None:
 
 CLEANUP_ROUNDS = 5
 # fast_simplification's ``agg`` (its default 7): how far each pass of its quadric decimation may
-# go. At 7 it tore TOSCA's 20k-52k meshes into 5-35 pieces (the copy keeps the largest, with holes
-# where the rest was), and fast marching on the copy from a feature point erred by 0.02 sqrt(area)
-# at the median, by up to 0.6 at the 99th percentile on michael14; at 3, the same 6,000 vertices
-# in the same time keep the mesh's Euler characteristic within one or two and halve the median
-# error (``docs/decisions/speed.md``).
+# go. At 7 it tore TOSCA's 19k-52k meshes into 5-35 pieces (the copy keeps the largest, with holes
+# where the rest was), and fast marching on the copy erred by 0.02 sqrt(area) at the median; at 3,
+# the same 6,000 vertices in the same time keep the mesh's Euler characteristic within a few and
+# halve the median error (``docs/decisions/features.md``, "The coarse copy keeps its parts apart").
 DECIMATION_AGGRESSIVENESS = 3.0
 # Only meshes this many times larger than the proxy are decimated: below, it saves too little.
 PROXY_MIN_RATIO = 2.0
