@@ -77,8 +77,7 @@ class CoarseProxy:
         target = collapsed_into[known]
         corners = faces[self._faces[known]]  # (k, 3)
         n = self.mesh.n_vertices
-        edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-        ring = np.unique(np.minimum(edges[:, 0], edges[:, 1]) * n + np.maximum(edges[:, 0], edges[:, 1]))
+        ring, _ = self.mesh.edge_counts()  # the copy's edges as keys lo * n + hi
         pairs = np.minimum(target[:, None], corners) * n + np.maximum(target[:, None], corners)
         near = (corners == target[:, None]).any(axis=1) | np.isin(pairs, ring).any(axis=1)
         stray = known[~near]
@@ -95,8 +94,8 @@ class CoarseProxy:
             has = np.flatnonzero(count > j)
             face = order[start[around[has]] + j] // 3
             bary = closest_barycentric(positions[stray[has]], *(self.mesh.vertices[faces[face, i]] for i in range(3)))
-            point = np.einsum("kc,kcd->kd", bary, self.mesh.vertices[faces[face]])
-            gap = np.einsum("kd,kd->k", point - positions[stray[has]], point - positions[stray[has]])
+            offset = interpolate(self.mesh, self.mesh.vertices, face, bary) - positions[stray[has]]
+            gap = np.einsum("kd,kd->k", offset, offset)
             better = gap < best[has]
             best[has[better]] = gap[better]
             self._faces[stray[has[better]]] = face[better]
