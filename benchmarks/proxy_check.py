@@ -34,6 +34,7 @@ def main(argv=None) -> int:
 
     import darcyan.geometry.proxy as proxy_module
     from darcyan.config import DarcyanConfig
+    from darcyan.errors import DarcyanError
     from darcyan.method.pipeline import describe_shape, load_shape
 
     folder = Path(args.dataset) if Path(args.dataset).is_dir() else DATA / args.dataset
@@ -68,6 +69,9 @@ def main(argv=None) -> int:
                 row.append(f"{np.median(errors):.4f} / {np.percentile(errors, 99):.3f} / {errors.max():.3f}"
                            + (f" ({copy.strays})" if own else ""))
             print("| " + " | ".join(row) + " |", flush=True)
+    except DarcyanError as exc:  # a mesh that cannot be read or used: one line, the file and the problem
+        print(f"proxy_check: {exc}", file=sys.stderr)
+        return 2
     finally:
         proxy_module.CoarseProxy._keep_on_own_part = own_part
         proxy_module.DECIMATION_AGGRESSIVENESS = aggressiveness
