@@ -51,14 +51,22 @@ def heat_kernel_diagonal(mesh: Mesh, length: float, heat: HeatKernel = HeatKerne
 def curvature_signature(mesh, mean_curvature: np.ndarray, lengths=MirrorTest().signature_lengths,
                         diffusion_steps: int = HeatKernel().diffusion_steps, known: dict | None = None) -> np.ndarray:
     """``(n, len(lengths))`` mean curvature diffused over each of ``lengths``, each scaled to mean
-    magnitude 1: a cheap, intrinsic, mirror-blind signature that differs between the front and
-    the back of a torso or a limb. ``known``: columns already made for this mesh, curvature and
-    steps, by length; those missing are made and added to it."""
+    magnitude 1 over the surface (weighed by the vertices' mixed Voronoi areas): a cheap,
+    intrinsic, mirror-blind signature that differs between the front and the back of a torso or
+    a limb. ``known``: columns already made for this mesh, curvature and steps, by length; those
+    missing are made and added to it.
+
+    The mean is over the area, not the vertices: a mesh whose vertices crowd where it curves (a
+    decimated copy, whose collapses keep the fingers and the face) would otherwise be scaled by
+    its curved parts, and two meshings of one surface would not compare (on faust-5k's
+    mixed-resolution copies the signatures of corresponding points differed twice as much
+    between a mesh and a decimated copy; ``docs/decisions/every-pair.md``)."""
     known = {} if known is None else known
+    area = mixed_voronoi_area(mesh)
     for length in lengths:
         if length not in known:
             c = heat_diffuse(mesh, mean_curvature, length, diffusion_steps)
-            known[length] = c / max(float(np.abs(c).mean()), 1e-12)
+            known[length] = c / max(float(np.abs(c) @ area / area.sum()), 1e-12)
     return np.stack([known[length] for length in lengths], axis=1)
 
 
