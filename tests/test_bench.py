@@ -70,6 +70,9 @@ def test_classes_pairs_and_dataset_errors(tmp_path, figures):
     pairs.write_text("figure0\n")
     with pytest.raises(DarcyanError, match="line 1: expected"):
         read_pairs(pairs, dataset)
+    pairs.write_bytes(b"figure0\tfigure\xff\n")  # not UTF-8: one line naming the file, no traceback
+    with pytest.raises(DarcyanError, match="pairs.txt: not a text file"):
+        read_pairs(pairs, dataset)
     with pytest.raises(DarcyanError, match="no meshes"):
         discover_dataset(tmp_path)
     import trimesh  # a folder of glTF files is a dataset too

@@ -98,6 +98,8 @@ def read_pairs(path: str | os.PathLike, dataset: Dataset, groups: dict | None = 
         text = path.read_text()
     except OSError as exc:
         raise DarcyanError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise DarcyanError(f"{path}: not a text file of pair lines") from None
     pairs = []
     for number, line in enumerate(text.splitlines(), 1):
         line = line.strip()

@@ -51,7 +51,7 @@ def heat_kernel_diagonal(mesh: Mesh, length: float, heat: HeatKernel = HeatKerne
 def curvature_signature(mesh, mean_curvature: np.ndarray, lengths=MirrorTest().signature_lengths,
                         diffusion_steps: int = HeatKernel().diffusion_steps, known: dict | None = None) -> np.ndarray:
     """``(n, len(lengths))`` mean curvature diffused over each of ``lengths``, each scaled to mean
-    magnitude 1 over the surface (weighed by the vertices' mixed Voronoi areas): a cheap,
+    magnitude 1 over the surface (weighted by the vertices' mixed Voronoi areas): a cheap,
     intrinsic, mirror-blind signature that differs between the front and the back of a torso or
     a limb. ``known``: columns already made for this mesh, curvature and steps, by length; those
     missing are made and added to it.

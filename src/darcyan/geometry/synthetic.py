@@ -44,10 +44,13 @@ def cylinder(radius: float = 1.0, height: float = 4.0, sections: int = 96, rings
     return Mesh(v, _grid_faces(sections, rings, True, False), name=f"cylinder(r={radius})")
 
 
-def torus(major: float = 2.0, minor: float = 0.75, nu: int = 160, nv: int = 80) -> Mesh:
-    """A torus around the z axis: outer equator at distance major + minor from the axis."""
+def torus(major: float = 2.0, minor: float = 0.75, nu: int = 160, nv: int = 80, rings=None) -> Mesh:
+    """A torus around the z axis: outer equator at distance major + minor from the axis. Its
+    rings around the tube sit at the angles ``rings`` (increasing, in [0, 2 pi), 0 on the outer
+    equator) when given, else at ``nv`` even steps."""
     u = 2 * np.pi * np.arange(nu) / nu
-    w = 2 * np.pi * np.arange(nv) / nv
+    w = 2 * np.pi * np.arange(nv) / nv if rings is None else np.asarray(rings, dtype=np.float64)
+    nv = len(w)
     uu, ww = np.meshgrid(u, w, indexing="ij")
     ring = major + minor * np.cos(ww)
     v = np.stack([ring * np.cos(uu), ring * np.sin(uu), minor * np.sin(ww)], axis=-1).reshape(-1, 3)
