@@ -14,10 +14,10 @@ import os
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .config import DarcyanConfig
 from .dense.config import DenseConfig
-from .dense.maps import DENSE_FAILURES, DenseMap, dense_map, dense_map_to_csv, shape_operators
 from .errors import DarcyanError
 from .geometry.mesh import Mesh
 from .geometry.shape import Shape, prepare_shape
@@ -31,6 +31,9 @@ from .method.pipeline import (
     match_shapes,
 )
 from .parallel import owns_threads
+
+if TYPE_CHECKING:  # the dense layer is imported where a map or a verification is made: a sparse match needs none
+    from .dense.maps import DenseMap
 
 VERIFY_CHOICES = ("auto", True, False)
 
@@ -152,6 +155,8 @@ def dense_text(source: str, target: str, map_12, form: str) -> str:
     if form == "json":
         return json.dumps({"source": str(source), "target": str(target),
                            "target_vertex": [int(v) for v in map_12]}) + "\n"
+    from .dense.maps import dense_map_to_csv
+
     return dense_map_to_csv(map_12)
 
 
@@ -232,6 +237,8 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
     for index, (target, description) in enumerate(zip(names[1:], descriptions[1:]), start=1):
         matches = match_shapes(descriptions[0], description, config)
         verification = None
+        if verification_wanted(matches, verify, dense) or dense:
+            from .dense.maps import DENSE_FAILURES, dense_map
         if verification_wanted(matches, verify, dense):
             below = config.mirror.verify_below if matches.in_doubt else config.mirror.verify_sparse_below
             why = "" if verify is True else (f" ({'in doubt: ' if matches.in_doubt else ''}the orientation test's "
@@ -308,6 +315,8 @@ def _describe(inputs: list, prepared: dict, config: DarcyanConfig, repair: bool,
     for i, shape in prepared.items():  # given in memory
         described[i] = analyze_shape(shape, config).description
     if dense_config is not None and files:
+        from .dense.maps import shape_operators
+
         both = describe_and_prepare(sources, config, repair, store, jobs, partial(shape_operators, config=dense_config))
         described.update({i: description for i, (description, _) in zip(files, both)})
         prepared.update({i: shape for i, (_, shape) in zip(files, both)})
