@@ -165,11 +165,12 @@ def test_humans_keep_left_and_right(tosca, tmp_path):
 def test_handedness_undoes_hand_and_foot_swaps_the_mirror_test_missed(tosca, tmp_path):
     """tosca-5k pairs whose hands or feet go to the other side without handedness; handedness
     sets them right. By the vts ground truth: with it every match is right, without it fewer are.
-    (Of the 422 michael and david pairs of tosca-5k, 4 change so.)"""
+    (Of the 422 michael and david pairs of tosca-5k, 6 change so: michael17 -> michael19,
+    michael19 -> michael11, michael5 and michael8, michael3 -> michael14, michael8 -> michael19.)"""
     from darcyan.io.cache import ShapeCache
 
     cache = ShapeCache(tmp_path / "cache")
-    pairs = (("michael11", "michael19"), ("michael19", "michael17"))
+    pairs = (("michael17", "michael19"), ("michael3", "michael14"))
     with_handedness = {(a, b): correct_matches(tosca / "tosca-5k", a, b, cache) for a, b in pairs}
     for (a, b), (correct, total) in with_handedness.items():
         assert correct == total >= 4, (a, b, correct, total)  # head, hands and feet: not an empty success
