@@ -35,7 +35,7 @@ def test_an_alternative_with_the_same_landmarks_is_not_a_rival_seed(figure_pair)
 
 @pytest.mark.slow
 def test_a_mirrored_seed_is_replaced_by_the_alternative_that_keeps_the_body(faust):
-    # FAUST tr_reg_016 -> tr_reg_020 (two people): the sparse stage sends the body round (1 of 5
+    # FAUST tr_reg_016 -> tr_reg_020 (two people): the sparse stage's matching is mirrored (1 of 5
     # right); the map it seeds keeps the wrong landmarks' orientation by turning the body round
     # (~1% within 0.05). Its alternatives include the right matching, whose first map keeps the
     # curvature signature (face, chest) better: the dense map takes it. (Measured: 0.008 within

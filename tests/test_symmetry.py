@@ -166,7 +166,8 @@ def test_handedness_undoes_hand_and_foot_swaps_the_mirror_test_missed(tosca, tmp
     """tosca-5k pairs whose hands or feet go to the other side without handedness; handedness
     sets them right. By the vts ground truth: with it every match is right, without it fewer are.
     (Of the 422 michael and david pairs of tosca-5k, 6 change so: michael17 -> michael19,
-    michael19 -> michael11, michael5 and michael8, michael3 -> michael14, michael8 -> michael19.)"""
+    michael19 -> michael11, michael19 -> michael5, michael19 -> michael8, michael3 -> michael14
+    and michael8 -> michael19.)"""
     from darcyan.io.cache import ShapeCache
 
     cache = ShapeCache(tmp_path / "cache")
@@ -194,8 +195,10 @@ def test_true_matching_ranked_below_the_eighth_candidate_is_still_found(tosca, t
         assert correct_matches(tosca / "tosca-5k", a, b, cache, every_match) == (6, 6), (a, b)
 
 
-def test_a_cached_match_imports_no_scipy(tmp_path):
-    """The warm path's budget (0.5 s for a second match) has no room for scipy's 0.3 s import."""
+def test_a_cached_match_imports_no_scipy_and_no_dense_map(tmp_path):
+    """The warm path's budget (0.5 s for a second match) has no room for scipy's 0.3 s import, nor
+    for the dense layer's modules, which a sparse match does not call (``darcyan.dense`` names
+    them lazily)."""
     import os
     import subprocess
     import sys
@@ -210,10 +213,13 @@ def test_a_cached_match_imports_no_scipy(tmp_path):
     env = {**os.environ, "DARCYAN_CACHE": str(tmp_path / "cache")}
     script = ("import sys; from darcyan.cli import main;"
               " code = main(['match', *sys.argv[1:], '-o', sys.argv[1] + '.csv']);"
+              " print(sorted(m for m in sys.modules if m.startswith('darcyan.dense.')));"
               " print(sorted(m for m in sys.modules if m.split('.')[0] == 'scipy'))")
     first = subprocess.run([sys.executable, "-c", script, *paths], env=env, capture_output=True, text=True)
     assert first.returncode == 0, first.stderr
     assert "scipy" in first.stdout  # describing a shape does use it: the check below can fail
     second = subprocess.run([sys.executable, "-c", script, *paths], env=env, capture_output=True, text=True)
     assert second.returncode == 0, second.stderr
-    assert second.stdout.strip().splitlines()[-1] == "[]"
+    dense_modules, scipy_modules = second.stdout.strip().splitlines()[-2:]
+    assert scipy_modules == "[]"
+    assert dense_modules == "['darcyan.dense.config']", dense_modules

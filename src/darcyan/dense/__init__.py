@@ -6,7 +6,7 @@ Modules: ``maps`` (:func:`dense_map`, which puts the parts together), ``config``
 (:class:`DenseConfig`), ``landmarks``, ``seeds``, ``signatures``, ``zoomout``, ``verify`` (a
 verification kept per pair of files) and ``pyfm`` (pyFM's pipeline)."""
 
-from importlib import import_module
+from importlib import import_module as _import_module
 
 from .config import DenseConfig
 
@@ -22,7 +22,7 @@ __all__ = ["UNMAPPED", "DenseConfig", "DenseMap", "MapCheck", "SeedVerdict", "co
 
 def __getattr__(name: str):
     if name in _HOMES:
-        value = getattr(import_module(f".{_HOMES[name]}", __name__), name)
+        value = getattr(_import_module(f".{_HOMES[name]}", __name__), name)
         globals()[name] = value  # read once
         return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
