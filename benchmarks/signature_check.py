@@ -35,9 +35,9 @@ def main(argv=None) -> int:
 def signature(shape, where: str, scale: str, lengths, steps: int, smoothing: int, proxy_vertices: int) -> np.ndarray:
     """``(n, len(lengths))`` the shape's curvature signature computed as ``where`` (``"copy"``: on
     its coarse copy when it has one) and ``scale`` (``"area"``: darcyan's own; ``"vertices"``: each
-    column divided by its mean magnitude over the vertices) say."""
+    column divided by its mean magnitude over the vertices it was computed on) say."""
     from darcyan.geometry.curvature import principal_curvatures
-    from darcyan.geometry.heat import heat_diffuse, shape_signature
+    from darcyan.geometry.heat import curvature_signature, shape_signature
 
     proxy_vertices = proxy_vertices if where == "copy" else 0
     if scale == "area":
@@ -45,8 +45,9 @@ def signature(shape, where: str, scale: str, lengths, steps: int, smoothing: int
     proxy = shape.proxy(proxy_vertices) if proxy_vertices > 0 else None
     mesh = shape.mesh if proxy is None else proxy.mesh
     curvature = shape.curvatures(smoothing).mean if proxy is None else principal_curvatures(mesh, smoothing=smoothing).mean
-    columns = [heat_diffuse(mesh, curvature, length, steps) for length in lengths]
-    values = np.stack([c / max(float(np.abs(c).mean()), 1e-12) for c in columns], axis=1)
+    # darcyan's columns rescaled: each divided by its mean magnitude over the vertices instead
+    values = curvature_signature(mesh, curvature, lengths, steps)
+    values = values / np.maximum(np.abs(values).mean(axis=0), 1e-12)
     return values if proxy is None else proxy.to_full(values)
 
 

@@ -237,9 +237,9 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
     for index, (target, description) in enumerate(zip(names[1:], descriptions[1:]), start=1):
         matches = match_shapes(descriptions[0], description, config)
         verification = None
-        if verification_wanted(matches, verify, dense) or dense:
-            from .dense.maps import DENSE_FAILURES, dense_map
         if verification_wanted(matches, verify, dense):
+            from .dense.maps import DENSE_FAILURES
+
             below = config.mirror.verify_below if matches.in_doubt else config.mirror.verify_sparse_below
             why = "" if verify is True else (f" ({'in doubt: ' if matches.in_doubt else ''}the orientation test's "
                                              f"margin {matches.margin:.2f} < {below:g})")
@@ -252,6 +252,8 @@ def correspond(source, targets, *, dense: bool = False, config: DarcyanConfig | 
             verification["why"] = why
         made = None
         if dense:
+            from .dense.maps import DENSE_FAILURES, dense_map
+
             try:
                 made = dense_map(shape_of(0), shape_of(index), matches, dense_config,
                                  progress=lambda stage: say(f"dense map: {stage}"))
