@@ -40,7 +40,7 @@ def test_bad_sampling_is_a_config_error():
 
 
 def test_the_rivals_switches_are_true_or_false():
-    for name in ("start_in_doubt", "rival_by_checks", "rival_sure_matching"):
+    for name in ("start_in_doubt", "rival_by_checks", "rival_sure_matching", "rival_best_scored"):
         for bad in ("false", 0, None):
             with pytest.raises(ConfigError, match=f"{name} must be true or false"):
                 DenseConfig(**{name: bad})

@@ -269,6 +269,43 @@ def test_the_sure_matching_replaces_an_untrusted_alternative_by_its_checks(figur
 
 
 @pytest.mark.slow
+def test_the_best_scored_seed_replaces_the_first_the_margin_kept_by_its_checks(figure_pair):
+    """The sparse matching (tips rolled by one: wrong) is kept as the seed by a margin wider
+    than its alternative's lead (the right tips, whose short map scores lower). Its map is wholly
+    wrong and not trusted; the best-scored seed's map is made, beats it on orientation and
+    residual and is taken (``SeedVerdict.by_checks``, kept when the start without landmarks then
+    competes and loses), still not trusted: its seed did not stand clear. With
+    ``rival_best_scored`` off, or without alignment, the first map stays."""
+    shape_1, shape_2, _ = figure_pair
+    tips = synthetic.figure_tips()
+    wrong = dataclasses.replace(tip_correspondence(tips, np.roll(tips, 1)), alternatives=(tip_correspondence(tips, tips),),
+                                in_doubt=True)
+    # A margin of 90%: the first seed is kept unless another scores ten times lower.
+    config = dataclasses.replace(FAST_DENSE, landmarks="all", landmark_contradiction=0.0, seed_margin=0.9)
+
+    def rate(result):
+        return evaluate_dense(shape_1.mesh, shape_2.mesh, result.target, sample=DENSE_SCORED,
+                              target_solver=shape_2.solver).rate
+
+    taken = dense_map(shape_1, shape_2, wrong, config)
+    signatures = taken.check.verdict.signatures
+    assert signatures[1] < signatures[0]  # the right tips' short map scored lower: the rule's premise
+    assert taken.check.seed == 1 and taken.check.verdict.by_checks and not taken.check.trusted
+    assert "best-scored zoomout" in taken.timings and rate(taken) >= DENSE_MIN_RATE
+    assert {tuple(pair) for pair in taken.landmarks.tolist()} == {(int(t), int(t)) for t in tips}  # the right tips
+    from darcyan.cli import _seed_verdict
+
+    assert "a little better (within the margin that favours the first)" in _seed_verdict(taken.check.as_dict())
+    for kept in (dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, rival_best_scored=False,
+                                                                        start_in_doubt=False)),
+                 # without alignment no residual could judge: the map is not even made
+                 dense_map(shape_1, shape_2, wrong, dataclasses.replace(config, alignment_rounds=0,
+                                                                        start_in_doubt=False))):
+        assert kept.check.seed == 0 and not kept.check.trusted and rate(kept) < 0.2
+        assert "best-scored zoomout" not in kept.timings
+
+
+@pytest.mark.slow
 def test_a_landmark_pair_the_others_contradict_is_found(figure_pair):
     """contradicted_landmark: on the figure's right tips every pair's source is sent by the
     others' short map near its target (within 0.1 sqrt(area); measured 0.05); a pair sent to

@@ -315,6 +315,13 @@ def _seed_choice(about: dict) -> str:
                 f"alternative matching {about['seed']}: the feature matches have too few consistent matches") + lost + close
     if about["seed"] == 0:
         verdict = "the feature matches hold against their alternatives"
+    elif about.get("by_checks"):  # the best-scored seed over the first, which the margin had kept
+        first = ("the feature matches' own map" if 0 in about["signatures"] else
+                 "the first usable alternative's map (the feature matches have too few consistent matches)")
+        verdict = (f"alternative matching {about['seed']} replaces the feature matches: its short dense map kept "
+                   f"the shapes' curvature a little better (within the margin that favours the first), {first} "
+                   f"was not trusted, and this one agrees better with its landmarks' orientation and is followed "
+                   f"more closely by the alignment")
     elif 0 not in about["signatures"]:
         verdict = (f"alternative matching {about['seed']} replaces the feature matches (they have too few "
                    f"consistent matches)")

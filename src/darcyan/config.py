@@ -536,6 +536,14 @@ class DenseConfig:
             extremity can score a few percent lower by the signature of a short map and still
             turn a limb or the head round (``docs/decisions/every-pair.md``). Costs such a map
             one more map.
+        rival_best_scored: when the map from the first usable seed (the sparse matching, which
+            ``seed_margin`` kept although another seed scored lower by less than the margin) is
+            not trusted, the map of the seed that scored lowest is made too (ZoomOut with
+            alignment only), and taken when it beats the first map on orientation and residual
+            (``SeedVerdict.by_checks``; it stays untrusted: its seed did not stand clear). Two seeds a few
+            percent apart are a knife's edge that the margin settles for the sparse matching; a
+            map from it that fails the checks has lost that favour
+            (``docs/decisions/every-pair.md``). Costs such a map one more map.
         landmark_contradiction: a ZoomOut map that is not trusted (from the matches, or from
             the landmarks of the start without them) has its landmark pairs checked against each
             other, before the start without landmarks competes and whether or not it does: each
@@ -627,6 +635,7 @@ class DenseConfig:
     rival_agreement: float = 0.5
     rival_agreement_radius: float = 0.05
     rival_sure_matching: bool = True
+    rival_best_scored: bool = True
     landmark_contradiction: float = 0.3
     handle_length: float = 0.05
     handle_max_vertices: int = 100_000
@@ -651,7 +660,7 @@ class DenseConfig:
                 raise ConfigError(f"dense: {name} must be a positive integer, got {value!r}")
         if self.basis_start > self.basis_size:
             raise ConfigError(f"dense: basis_start ({self.basis_start}) exceeds basis_size ({self.basis_size})")
-        for name in ("start_in_doubt", "rival_by_checks", "rival_sure_matching"):
+        for name in ("start_in_doubt", "rival_by_checks", "rival_sure_matching", "rival_best_scored"):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"dense: {name} must be true or false, got {getattr(self, name)!r}")
         for name in ("zoomout_samples", "local_search_above", "basis_proxy_vertices", "verify_proxy_vertices",

@@ -5,7 +5,9 @@
 1. the seed (:mod:`darcyan.dense.seeds`): the sparse matching or one of its alternatives, the
    one whose short ZoomOut best keeps the curvature signature (:mod:`darcyan.dense.signatures`;
    when an alternative's map is not trusted and the sparse stage was sure of its matching, that
-   matching's own map is taken if its checks beat it, ``DenseConfig.rival_sure_matching``),
+   matching's own map is taken if its checks beat it, ``DenseConfig.rival_sure_matching``; when
+   the first seed's map, which ``seed_margin`` kept over a seed that scored a little lower, is
+   not trusted, that seed's map is taken if its checks beat it, ``DenseConfig.rival_best_scored``),
    or, when none gives three consistent landmarks, the landmarks of a short map started from
    the spectra or the axes of inertia (:mod:`darcyan.dense.start`); when the map from the
    matches (or from that start) is not trusted, a landmark pair the others contradict is left
@@ -216,9 +218,11 @@ def _dense_map(shape_1, shape_2, correspondence, config: DenseConfig, progress) 
     check = _checked(shape_1, local, seed, check_of_seeds(seed, choice.seeds, config.seed_margin), residual,
                      correspondence, config)
     pairs = (seed.source, seed.target)
-    sure = _sure_matching_rival(shape_1, shape_2, choice, check, correspondence, config, say, timings)
-    if sure is not None:
-        local, residual, check, seed = sure
+    # (the two rules exclude each other: one replaces an alternative's map, the other the first seed's)
+    replaced = (_sure_matching_rival(shape_1, shape_2, choice, check, correspondence, config, say, timings)
+                or _best_scored_rival(shape_1, shape_2, choice, check, correspondence, config, say, timings))
+    if replaced is not None:
+        local, residual, check, seed = replaced
         pairs = (seed.source, seed.target)
         choice = dataclasses.replace(choice, seed=seed)
     doubted = not check.trusted and config.method == "zoomout"  # from the matches or started without them
@@ -269,8 +273,8 @@ def _dense_map(shape_1, shape_2, correspondence, config: DenseConfig, progress) 
             else:  # the same map: only the verdict gains the rival (a map not trusted stays so)
                 verdict = seed_check(check.seed, scores, config.seed_margin, check.start, check.verdict.start_from,
                                      rival_seed.rank)
-                check = dataclasses.replace(check, verdict=dataclasses.replace(verdict,
-                                                                               left_out=check.verdict.left_out))
+                check = dataclasses.replace(check, verdict=dataclasses.replace(
+                    verdict, left_out=check.verdict.left_out, by_checks=check.verdict.by_checks))
     target = input_map(shape_1, shape_2, local)
     landmarks = np.stack([shape_1.mesh.input_index[pairs[0]], shape_2.mesh.input_index[pairs[1]]], axis=1)
     return DenseMap(target, landmarks, timings, check)
@@ -316,6 +320,38 @@ def _sure_matching_rival(shape_1, shape_2, choice, check: MapCheck, corresponden
     sure_check = _checked(shape_1, local, sure, verdict, residual, correspondence, config)
     if _passes_checks(sure_check, check, config):
         return local, residual, sure_check, sure
+    return None
+
+
+def _best_scored_rival(shape_1, shape_2, choice, check: MapCheck, correspondence, config: DenseConfig, say,
+                       timings: dict) -> tuple | None:
+    """``(local (n1,), residual (sqrt(area) units), check, seed)`` of the map from the seed
+    that scored lowest when it is taken over the map ``check`` of the first seed, which
+    ``seed_margin`` kept although the other scored lower (``DenseConfig.rival_best_scored``):
+    that map is not trusted, and the best-scored seed's map agrees better with its landmarks'
+    orientation and its alignment follows it more closely (:func:`_beats`). ``None`` otherwise
+    (nothing made unless the first two hold, with ZoomOut and its alignment). The margin
+    favours the sparse matching for the evidence of the sparse stage; a map from it that fails
+    the checks has lost that favour, and two seeds a few percent apart are a knife's edge that
+    whole maps decide better than short ones. Unlike the sure matching's map
+    (:func:`_sure_matching_rival`, which is then trusted and so must pass a trusted map's
+    checks), a map taken here stays untrusted: its seed did not stand clear of the first (or it
+    set aside a matching the sparse stage was sure of), so beating the first map is enough."""
+    # (without alignment the residuals are NaN and _beats never holds: no map is made)
+    if not (config.rival_best_scored and config.method == "zoomout" and config.alignment_rounds > 0
+            and not check.trusted and check.start == "matches" and choice.seeds
+            and check.seed == choice.seeds[0].rank):
+        return None
+    # (the lowest-scored seed keeps its per-vertex arrays: seeds._without_losers)
+    best = min(choice.seeds, key=lambda s: s.signature)
+    if best.rank == check.seed or best.fields_1 is None:
+        return None
+    say("the best-scored seed's map (the first seed's is not trusted)")
+    local, residual = _map_of_seed(shape_1, shape_2, best, config, choice, say, timings, "best-scored ")
+    verdict = dataclasses.replace(check_of_seeds(best, choice.seeds, config.seed_margin), by_checks=True)
+    best_check = _checked(shape_1, local, best, verdict, residual, correspondence, config)
+    if _beats(best_check, check):
+        return local, residual, best_check, best
     return None
 
 

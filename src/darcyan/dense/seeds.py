@@ -151,8 +151,9 @@ class SeedVerdict:
             when the map made without it was taken, else ``None``.
         by_checks: the seed's map won by its own checks (orientation and residual), not by a
             clearly lower signature score: the start without landmarks'
-            (``DenseConfig.rival_by_checks``) or the sure sparse matching's over an alternative
-            (``DenseConfig.rival_sure_matching``).
+            (``DenseConfig.rival_by_checks``), the sure sparse matching's over an alternative
+            (``DenseConfig.rival_sure_matching``), or the best-scored seed's over the first
+            seed the margin kept (``DenseConfig.rival_best_scored``).
         handles_cut: how many handles the map's shapes were cut open at: the map made on copies
             cut open (``DenseConfig.handle_length``) was taken over the map on the shapes as
             given, which was not trusted; 0 otherwise.
