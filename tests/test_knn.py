@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from darcyan.geometry.knn import KDTREE_MAX_DIM, NearestPoints, nearest_neighbours, nearest_points, nearest_rows
+from darcyan.geometry.knn import KDTREE_MAX_DIM, QUERY_BLOCK, NearestPoints, nearest_neighbours, nearest_points, nearest_rows
 
 
 @pytest.mark.parametrize("dim", [3, 8, 11])
@@ -35,7 +35,7 @@ def test_prepared_search_equals_a_kd_tree_for_every_set_of_queries():
     points = (20.0 + rng.random((2000, 9))).astype(np.float32)
     search = NearestPoints(points)  # prepared once, then searched with several sets of queries
     tree = cKDTree(points)
-    for size in (1, 63, 64, 65, 400):
+    for size in (1, QUERY_BLOCK - 1, QUERY_BLOCK, QUERY_BLOCK + 1, 2 * QUERY_BLOCK + 5):  # about the blocks' edges
         queries = (20.0 + rng.random((size, 9))).astype(np.float32)
         found = search(queries)
         distance = np.linalg.norm(queries.astype(np.float64) - points[found].astype(np.float64), axis=1)
