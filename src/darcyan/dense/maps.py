@@ -47,7 +47,7 @@ from .alignment import align
 from .config import DenseConfig
 from .landmarks import distance_fields
 from .pyfm import DENSE_PIPELINE, pyfm_point_map
-from .seeds import SeedVerdict, check_of_seeds, choose_seed, contradicted_landmark, rival_start, seed_check, without_landmark
+from .seeds import SeedVerdict, best_scored, check_of_seeds, choose_seed, contradicted_landmark, rival_start, seed_check, without_landmark
 from .signatures import point_signature, signature_coordinates, signature_turn_coordinates, signature_turn_weight
 from .zoomout import consensus_map, dense_eigenvalues, dense_spectrum, read_out_map, zoomout, zoomout_samples
 
@@ -342,8 +342,7 @@ def _best_scored_rival(shape_1, shape_2, choice, check: MapCheck, correspondence
             and not check.trusted and check.start == "matches" and choice.seeds
             and check.seed == choice.seeds[0].rank):
         return None
-    # (the lowest-scored seed keeps its per-vertex arrays: seeds._without_losers)
-    best = min(choice.seeds, key=lambda s: s.signature)
+    best = choice.seeds[best_scored(choice.seeds)]  # it kept its per-vertex arrays (seeds._without_losers)
     if best.rank == check.seed or best.fields_1 is None:
         return None
     say("the best-scored seed's map (the first seed's is not trusted)")

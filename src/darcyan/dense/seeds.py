@@ -369,13 +369,20 @@ def _seeds(shape_1, shape_2, correspondence, config: DenseConfig, samples: tuple
     return seeds
 
 
+def best_scored(seeds: list) -> int:
+    """Index in ``seeds`` (:class:`Seed` each) of the lowest signature score, the first of
+    equal ones: the seed :func:`_without_losers` keeps beside the first (a map in doubt may
+    still be made from it, ``DenseConfig.rival_best_scored``)."""
+    return min(range(len(seeds)), key=lambda i: seeds[i].signature)
+
+
 def _without_losers(seeds: list, margin: float) -> list:
     """``seeds`` with the per-vertex arrays of those that can no longer be chosen let go (kept:
     the first, which wins ties within the margin, and the lowest score so far): on a 210k mesh
     each seed's coordinates take 200 MB."""
     if len(seeds) < 3:
         return seeds
-    best = min(range(len(seeds)), key=lambda i: seeds[i].signature)
+    best = best_scored(seeds)
     return [seed if i in (0, best) or seed.fields_1 is None else dataclasses.replace(seed, **dict.fromkeys(_PER_VERTEX))
             for i, seed in enumerate(seeds)]
 
