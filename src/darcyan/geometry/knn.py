@@ -31,7 +31,7 @@ NN_BLOCK_ROWS = 256
 
 # Nearest-neighbour searches in numpy, not scipy.spatial: importing that costs more (0.3 s) than
 # a cached match's whole work, and the sets here are small (800 queries, <= 10k points).
-QUERY_BLOCK = 256  # queries per block: a (256, 10k) block of distances, 20 MB, reused (64: 5-20% slower)
+QUERY_BLOCK = 64  # queries per block: a (64, 10k) block of distances, 5 MB, reused
 # Queries x points below which nearest_points runs in this thread: the mirror test's rounds (a few
 # hundred queries among 2,000) take less than starting the thread pool would (and its import, in a
 # cached match that needs none).
